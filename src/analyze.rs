@@ -1,0 +1,137 @@
+//! Offline analysis: a recording is read block by block and fed to the same streaming
+//! [`Detector`] the daemon uses, as fast as it goes; the events (and, on request, the
+//! bounce solution) are written as JSON or CSV.
+//!
+//! Runs on the main thread of `onomato analyze`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::audio::{AudioError, ChannelSelect, WavSource};
+use crate::config::Config;
+use crate::detect::{DetectError, Detector, Event};
+use crate::pattern::{self, PatternError};
+use crate::solver::{self, Contact};
+
+/// Frames read from the file per block.
+pub const READ_BLOCK_FRAMES: usize = 4096;
+
+#[derive(Debug, thiserror::Error)]
+pub enum AnalyzeError {
+    #[error("recording: {0}")]
+    Recording(#[source] AudioError),
+    #[error("recording '{}' holds no audio (0 samples)", .0.display())]
+    EmptyRecording(PathBuf),
+    #[error(transparent)]
+    Pattern(#[from] PatternError),
+    #[error(transparent)]
+    Detect(#[from] DetectError),
+}
+
+/// What an analysis found.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    pub events: Vec<Event>,
+    /// Length of the recording, seconds.
+    pub duration: f64,
+    pub sample_rate: u32,
+}
+
+/// Detects `config`'s patterns in the WAV file `recording`.
+pub fn analyze_file(recording: &Path, config: &Config) -> Result<Analysis, AnalyzeError> {
+    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let select = config
+        .detector
+        .channel
+        .map_or(ChannelSelect::Mix, ChannelSelect::Index);
+    let mut source = WavSource::open(recording, select).map_err(AnalyzeError::Recording)?;
+    let mut detector = Detector::new(patterns, &config.detector, source.sample_rate())?;
+    let mut events = Vec::new();
+    let mut block = Vec::with_capacity(READ_BLOCK_FRAMES);
+    let mut frames = 0u64;
+    loop {
+        let n = source
+            .read_block(READ_BLOCK_FRAMES, &mut block)
+            .map_err(AnalyzeError::Recording)?;
+        if n == 0 {
+            break;
+        }
+        frames += n as u64;
+        detector.process(&block, &mut events);
+    }
+    if frames == 0 {
+        return Err(AnalyzeError::EmptyRecording(recording.to_path_buf()));
+    }
+    detector.finish(&mut events);
+    tracing::info!(
+        recording = %recording.display(),
+        seconds = frames as f64 / f64::from(source.sample_rate()),
+        events = events.len(),
+        "analysis done"
+    );
+    Ok(Analysis {
+        events,
+        duration: frames as f64 / f64::from(source.sample_rate()),
+        sample_rate: source.sample_rate(),
+    })
+}
+
+/// Runs a whole in-memory signal through a detector in blocks of `block` samples
+/// (tests, benchmarks, evaluation).
+pub fn detect_in_blocks(detector: &mut Detector, signal: &[f32], block: usize) -> Vec<Event> {
+    let mut events = Vec::new();
+    for chunk in signal.chunks(block.max(1)) {
+        detector.process(chunk, &mut events);
+    }
+    detector.finish(&mut events);
+    events
+}
+
+#[derive(Serialize)]
+struct JsonOutput<'a> {
+    events: &'a [Event],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bounce: Option<&'a [Contact]>,
+}
+
+/// Writes `{"events":[...]}` (and `"bounce":[...]` when given) and a newline.
+pub fn write_json(
+    out: &mut dyn Write,
+    events: &[Event],
+    bounce: Option<&[Contact]>,
+) -> std::io::Result<()> {
+    serde_json::to_writer(&mut *out, &JsonOutput { events, bounce })?;
+    writeln!(out)
+}
+
+/// Header of the CSV output.
+pub const CSV_HEADER: &str = "id,pattern,kind,time,end,strength,score,emitted_at";
+
+/// Writes a header and one row per event. Pattern names cannot hold commas or quotes
+/// (see [`crate::config::check_pattern_name`]), so no quoting is needed.
+pub fn write_csv(out: &mut dyn Write, events: &[Event]) -> std::io::Result<()> {
+    writeln!(out, "{CSV_HEADER}")?;
+    for e in events {
+        let end = e.end.map(|x| format!("{x:.5}")).unwrap_or_default();
+        writeln!(
+            out,
+            "{},{},{},{:.5},{},{:.4},{:.4},{:.5}",
+            e.id,
+            e.pattern,
+            e.kind.as_str(),
+            e.time,
+            end,
+            e.strength,
+            e.score,
+            e.emitted_at
+        )?;
+    }
+    Ok(())
+}
+
+/// Bounce contacts for an analysis.
+pub fn bounce(events: &[Event], config: &Config) -> Vec<Contact> {
+    solver::solve(events, &config.bounce_or_default())
+}

@@ -1,0 +1,20 @@
+//! onomato: turns short vocal sounds ("tick", "pop", "chhh") into timed events for
+//! animation and game engines.
+//!
+//! The library holds everything; the `onomato` binary is a thin command-line layer
+//! ([`cli`]). Modules, by concern: [`config`] (TOML and command-line settings),
+//! [`audio`] (WAV in, resampling), [`pattern`] (enrolled takes), [`detect`] (the one
+//! streaming detection core), [`solver`] (the bounce solver), [`analyze`] (the offline
+//! command and its output formats).
+
+pub mod analyze;
+pub mod audio;
+pub mod cli;
+pub mod config;
+pub mod detect;
+pub mod pattern;
+pub mod solver;
+
+pub use config::{Config, DetectorSettings, Method, PatternKind};
+pub use detect::{Detector, Event};
+pub use pattern::Pattern;

@@ -1,0 +1,207 @@
+//! Enrolled patterns: each configured take is read, mixed to mono, resampled to the
+//! working rate, checked (empty, silent, too short, too long) and trimmed of the silence
+//! around the sound.
+//!
+//! Runs on the main thread when a detector is built; never on the audio path.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::audio::{self, AudioError, ChannelSelect, WavSource};
+use crate::config::{DetectorSettings, PatternKind, PatternSpec};
+
+/// A take quieter than this (peak, dBFS) is refused as silent.
+pub const SILENT_PEAK_DBFS: f64 = -60.0;
+/// Leading and trailing samples quieter than this, relative to the take's peak, are cut.
+pub const TRIM_BELOW_PEAK_DB: f64 = -50.0;
+/// A take shorter than this after trimming is refused.
+pub const MIN_TAKE_SECONDS: f64 = 0.01;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PatternError {
+    #[error("pattern '{pattern}': {source}")]
+    Audio {
+        pattern: String,
+        #[source]
+        source: AudioError,
+    },
+    #[error("pattern '{pattern}': take '{}' {problem}", path.display())]
+    BadTake {
+        pattern: String,
+        path: PathBuf,
+        problem: String,
+    },
+}
+
+/// One enrolment take at the working rate.
+#[derive(Debug, Clone)]
+pub struct Take {
+    pub source: PathBuf,
+    /// Mono samples at the working rate, DC removed, trimmed.
+    pub samples: Vec<f32>,
+}
+
+impl Take {
+    /// Sum of squares of the samples.
+    pub fn energy(&self) -> f64 {
+        self.samples.iter().map(|&x| f64::from(x) * f64::from(x)).sum()
+    }
+}
+
+/// A pattern with its takes loaded.
+#[derive(Debug, Clone)]
+pub struct Pattern {
+    pub name: Arc<str>,
+    pub kind: PatternKind,
+    pub takes: Vec<Take>,
+    pub threshold: f64,
+    pub continuous_threshold: f64,
+}
+
+impl Pattern {
+    /// Loads every take of `spec` for the detector settings `settings`.
+    pub fn load(spec: &PatternSpec, settings: &DetectorSettings) -> Result<Self, PatternError> {
+        let takes = spec
+            .takes
+            .iter()
+            .map(|path| load_take(&spec.name, path, settings))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            name: Arc::from(spec.name.as_str()),
+            kind: spec.kind,
+            takes,
+            threshold: spec.threshold.unwrap_or(settings.threshold),
+            continuous_threshold: spec
+                .continuous_threshold
+                .unwrap_or(settings.continuous_threshold),
+        })
+    }
+
+    /// Builds a pattern from samples already at the working rate (tests, benchmarks,
+    /// recordings made in memory). The samples get the same DC removal and trimming as a
+    /// file, and the same checks.
+    pub fn from_samples(
+        name: &str,
+        kind: PatternKind,
+        takes: Vec<Vec<f32>>,
+        settings: &DetectorSettings,
+    ) -> Result<Self, PatternError> {
+        let takes = takes
+            .into_iter()
+            .enumerate()
+            .map(|(i, samples)| {
+                let source = PathBuf::from(format!("<take {}>", i + 1));
+                prepare_take(name, &source, samples, settings)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            name: Arc::from(name),
+            kind,
+            takes,
+            threshold: settings.threshold,
+            continuous_threshold: settings.continuous_threshold,
+        })
+    }
+
+    /// Length of the longest take, in working-rate samples.
+    pub fn max_len(&self) -> usize {
+        self.takes.iter().map(|t| t.samples.len()).max().unwrap_or(0)
+    }
+}
+
+/// Loads all patterns of a config.
+pub fn load_patterns(
+    specs: &[PatternSpec],
+    settings: &DetectorSettings,
+) -> Result<Vec<Pattern>, PatternError> {
+    specs.iter().map(|s| Pattern::load(s, settings)).collect()
+}
+
+fn load_take(pattern: &str, path: &Path, settings: &DetectorSettings) -> Result<Take, PatternError> {
+    let bad = |problem: String| PatternError::BadTake {
+        pattern: pattern.to_string(),
+        path: path.to_path_buf(),
+        problem,
+    };
+    let audio_err = |source| PatternError::Audio {
+        pattern: pattern.to_string(),
+        source,
+    };
+    let select = settings.channel.map_or(ChannelSelect::Mix, ChannelSelect::Index);
+    let mut source = WavSource::open(path, select).map_err(audio_err)?;
+    let rate = source.sample_rate();
+    if rate == 0 {
+        return Err(bad("declares a sample rate of 0 Hz".into()));
+    }
+    let seconds = source.frames_total() as f64 / f64::from(rate);
+    if seconds > settings.max_pattern_seconds {
+        return Err(bad(format!(
+            "is {seconds:.1} s long; a pattern take must be at most {} s (max_pattern_seconds): cut it to the sound",
+            settings.max_pattern_seconds
+        )));
+    }
+    let samples = source.read_all().map_err(audio_err)?;
+    if samples.is_empty() {
+        return Err(bad("holds no audio (0 samples)".into()));
+    }
+    let samples =
+        audio::resample_clip(&samples, rate, settings.sample_rate).map_err(audio_err)?;
+    prepare_take(pattern, path, samples, settings)
+}
+
+fn prepare_take(
+    pattern: &str,
+    path: &Path,
+    mut samples: Vec<f32>,
+    settings: &DetectorSettings,
+) -> Result<Take, PatternError> {
+    let bad = |problem: String| PatternError::BadTake {
+        pattern: pattern.to_string(),
+        path: path.to_path_buf(),
+        problem,
+    };
+    if samples.is_empty() {
+        return Err(bad("holds no audio (0 samples)".into()));
+    }
+    if let Some(i) = samples.iter().position(|x| !x.is_finite()) {
+        return Err(bad(format!("holds a non-finite sample at index {i}")));
+    }
+    let mean = samples.iter().map(|&x| f64::from(x)).sum::<f64>() / samples.len() as f64;
+    for x in &mut samples {
+        *x -= mean as f32;
+    }
+    let peak = samples.iter().fold(0.0f32, |m, &x| m.max(x.abs()));
+    let peak_db = 20.0 * f64::from(peak).log10();
+    if peak_db < SILENT_PEAK_DBFS {
+        return Err(bad(format!(
+            "is silent (peak {}); a pattern needs a sound louder than {SILENT_PEAK_DBFS} dBFS",
+            if peak > 0.0 {
+                format!("{peak_db:.1} dBFS")
+            } else {
+                "-inf dBFS".to_string()
+            }
+        )));
+    }
+    let floor = peak * 10f32.powf((TRIM_BELOW_PEAK_DB / 20.0) as f32);
+    let first = samples.iter().position(|x| x.abs() > floor).unwrap_or(0);
+    let last = samples.iter().rposition(|x| x.abs() > floor).unwrap_or(0);
+    let samples = samples[first..=last].to_vec();
+    let seconds = samples.len() as f64 / f64::from(settings.sample_rate);
+    if seconds < MIN_TAKE_SECONDS {
+        return Err(bad(format!(
+            "is only {:.1} ms long after trimming silence; a pattern take must last at least {} ms",
+            seconds * 1000.0,
+            MIN_TAKE_SECONDS * 1000.0
+        )));
+    }
+    if seconds > settings.max_pattern_seconds {
+        return Err(bad(format!(
+            "is {seconds:.1} s long; a pattern take must be at most {} s (max_pattern_seconds): cut it to the sound",
+            settings.max_pattern_seconds
+        )));
+    }
+    Ok(Take {
+        source: path.to_path_buf(),
+        samples,
+    })
+}
