@@ -321,7 +321,7 @@ impl StreamResampler {
         let skip = self.delay_left.min(written);
         self.delay_left -= skip;
         let room = limit.saturating_sub(self.produced) as usize;
-        let end = written.min(skip + room);
+        let end = written.min(skip.saturating_add(room));
         if end > skip {
             self.produced += (end - skip) as u64;
             sink(&self.out[skip..end], self.consumed);

@@ -1,0 +1,169 @@
+//! Deterministic synthetic sounds and helpers shared by the integration tests and the
+//! benchmark: patterns with a known shape, placed at known sample positions and gains.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use onomato::config::{DetectorSettings, PatternKind};
+use onomato::Pattern;
+
+pub const RATE: u32 = 22_050;
+
+/// xorshift64*: a small deterministic generator, so every test signal is reproducible.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Standard normal (Box-Muller).
+    pub fn normal(&mut self) -> f64 {
+        let u1 = self.unit().max(1e-12);
+        let u2 = self.unit();
+        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    }
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+pub fn samples_for(seconds: f64, rate: u32) -> usize {
+    (seconds * f64::from(rate)).round() as usize
+}
+
+/// A click: white noise under a fast exponential decay ("tick", "t", a knock).
+pub fn noise_burst(rate: u32, seconds: f64, decay: f64, seed: u64) -> Vec<f32> {
+    let mut rng = Rng::new(seed);
+    (0..samples_for(seconds, rate))
+        .map(|i| {
+            let t = i as f64 / f64::from(rate);
+            (0.5 * rng.normal() * (-t / decay).exp()) as f32
+        })
+        .collect()
+}
+
+/// A decaying sine sweeping from `f0` to `f1` Hz ("pop", "pew").
+pub fn sweep(rate: u32, seconds: f64, f0: f64, f1: f64, decay: f64) -> Vec<f32> {
+    let n = samples_for(seconds, rate);
+    let mut phase = 0.0f64;
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / f64::from(rate);
+            let f = f0 + (f1 - f0) * t / seconds;
+            phase += 2.0 * std::f64::consts::PI * f / f64::from(rate);
+            (0.6 * phase.sin() * (-t / decay).exp()) as f32
+        })
+        .collect()
+}
+
+/// A voiced, held sound: harmonics of `f0` up to 4 kHz with 1/k amplitudes and 5 ms
+/// fades ("hooo", "mmm").
+pub fn buzz(rate: u32, seconds: f64, f0: f64) -> Vec<f32> {
+    let n = samples_for(seconds, rate);
+    let fade = samples_for(0.005, rate).max(1);
+    let harmonics = (4000.0 / f0) as usize;
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / f64::from(rate);
+            let mut x = 0.0;
+            for k in 1..=harmonics {
+                x += (2.0 * std::f64::consts::PI * f0 * k as f64 * t).sin() / k as f64;
+            }
+            let ramp = (i.min(n - 1 - i) as f64 / fade as f64).min(1.0);
+            (0.25 * x * ramp) as f32
+        })
+        .collect()
+}
+
+/// Adds `pattern * gain` into `rec` from sample `at`.
+pub fn place(rec: &mut [f32], pattern: &[f32], at: usize, gain: f32) {
+    for (r, p) in rec[at..].iter_mut().zip(pattern) {
+        *r += p * gain;
+    }
+}
+
+/// Adds white Gaussian noise of the given RMS.
+pub fn add_noise(rec: &mut [f32], rms: f64, seed: u64) {
+    let mut rng = Rng::new(seed);
+    for x in rec {
+        *x += (rms * rng.normal()) as f32;
+    }
+}
+
+pub fn rms(x: &[f32]) -> f64 {
+    (x.iter().map(|&v| f64::from(v) * f64::from(v)).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// A fresh, empty folder for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("onomato-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// Writes mono 32-bit float WAV.
+pub fn write_wav_f32(path: &Path, samples: &[f32], rate: u32) {
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: rate,
+        bits_per_sample: 32,
+        sample_format: hound::SampleFormat::Float,
+    };
+    let mut w = hound::WavWriter::create(path, spec).expect("create wav");
+    for &s in samples {
+        w.write_sample(s).expect("write sample");
+    }
+    w.finalize().expect("finalize wav");
+}
+
+/// Writes integer PCM WAV with `channels` channels, each frame holding `frame(i)`.
+pub fn write_wav_int(path: &Path, frames: &[Vec<f32>], rate: u32, bits: u16) {
+    let spec = hound::WavSpec {
+        channels: frames[0].len() as u16,
+        sample_rate: rate,
+        bits_per_sample: bits,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(path, spec).expect("create wav");
+    let full = ((1i64 << (bits - 1)) - 1) as f32;
+    for frame in frames {
+        for &s in frame {
+            let v = (s.clamp(-1.0, 1.0) * full).round() as i32;
+            if bits == 8 {
+                w.write_sample(v as i8).expect("write sample");
+            } else {
+                w.write_sample(v).expect("write sample");
+            }
+        }
+    }
+    w.finalize().expect("finalize wav");
+}
+
+pub fn impulse(name: &str, samples: Vec<f32>, settings: &DetectorSettings) -> Pattern {
+    Pattern::from_samples(name, PatternKind::Impulse, vec![samples], settings).expect("pattern")
+}
+
+pub fn continuous(name: &str, samples: Vec<f32>, settings: &DetectorSettings) -> Pattern {
+    Pattern::from_samples(name, PatternKind::Continuous, vec![samples], settings)
+        .expect("pattern")
+}
+
+/// The three impulse patterns most tests use: distinct, realistic lengths.
+pub fn three_impulses() -> Vec<(&'static str, Vec<f32>)> {
+    vec![
+        ("tick", noise_burst(RATE, 0.050, 0.012, 11)),
+        ("pop", sweep(RATE, 0.080, 420.0, 110.0, 0.030)),
+        ("pew", sweep(RATE, 0.150, 2200.0, 600.0, 0.080)),
+    ]
+}
