@@ -71,8 +71,12 @@ pub struct WavSource {
 
 fn hound_reason(err: hound::Error) -> String {
     match err {
-        hound::Error::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-            "the file ends before its header says it should".to_string()
+        // hound reports a short data chunk as UnexpectedEof or as "Failed to read enough bytes."
+        hound::Error::IoError(e)
+            if e.kind() == std::io::ErrorKind::UnexpectedEof
+                || e.to_string().contains("read enough bytes") =>
+        {
+            "the file ends before its header says it should (truncated?)".to_string()
         }
         other => other.to_string(),
     }
@@ -109,6 +113,8 @@ impl WavSource {
                 reason: "the header declares 0 channels".to_string(),
             });
         }
+        // A mono file has only one channel to take, whatever the choice.
+        let select = if spec.channels == 1 { ChannelSelect::Mix } else { select };
         if let ChannelSelect::Index(wanted) = select {
             if wanted >= spec.channels {
                 return Err(AudioError::Channel {
@@ -156,21 +162,24 @@ impl WavSource {
         let wanted = max_frames * channels;
         self.interleaved.clear();
         let path = &self.path;
-        let frame = self.frames_read;
-        let corrupt = |e: hound::Error| AudioError::Corrupt {
+        let frames_before = self.frames_read;
+        let interleaved = &mut self.interleaved;
+        let corrupt = |e: hound::Error, done: usize| AudioError::Corrupt {
             path: path.clone(),
-            frame,
+            frame: frames_before + (done / channels) as u64,
             reason: hound_reason(e),
         };
         match self.kind {
             SampleKind::Float => {
                 for s in self.reader.samples::<f32>().take(wanted) {
-                    self.interleaved.push(s.map_err(corrupt)?);
+                    let v = s.map_err(|e| corrupt(e, interleaved.len()))?;
+                    interleaved.push(v);
                 }
             }
             SampleKind::Int { scale } => {
                 for s in self.reader.samples::<i32>().take(wanted) {
-                    self.interleaved.push(s.map_err(corrupt)? as f32 * scale);
+                    let v = s.map_err(|e| corrupt(e, interleaved.len()))?;
+                    interleaved.push(v as f32 * scale);
                 }
             }
         }

@@ -130,7 +130,8 @@ pub struct DetectorSettings {
     pub suppression_seconds: Option<f64>,
     /// Longest pattern take accepted.
     pub max_pattern_seconds: f64,
-    /// Channel of multi-channel inputs (`None`: mix all channels).
+    /// Channel of multi-channel inputs (`None`: mix all channels). Mono files are used
+    /// as they are.
     pub channel: Option<u16>,
 }
 

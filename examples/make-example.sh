@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Rebuilds the bundled example from a synthetic voice (espeak-ng) with sox:
+#   patterns/{tick,pop,boom}.wav  impulse patterns (one take each)
+#   patterns/hoo.wav              250 ms from the middle of a held "hoooo" (continuous)
+#   beat.wav                      10 s: the sounds at known times and levels, in light noise
+#   beat.truth.csv                onset_s,label,end_s,gain of every sound placed in beat.wav
+# Needs: espeak-ng, sox (apt-get install espeak-ng sox).
+set -euo pipefail
+cd "$(dirname "$0")"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+rate=22050
+mkdir -p patterns
+
+# Cut leading and trailing silence, mono, 16-bit, working rate.
+trim() { sox "$1" -r "$rate" -b 16 -c 1 "$2" silence 1 0.005 1% reverse silence 1 0.005 1% reverse; }
+
+for word in tick pop boom; do
+  espeak-ng -v en -w "$tmp/$word.wav" "$word"
+  trim "$tmp/$word.wav" "patterns/$word.wav"
+done
+# A monotone voice (narrow pitch range), as a held "hoo" is sung on one note.
+espeak-ng -v en -m -w "$tmp/hoo-raw.wav" '<speak><prosody range="x-low">hoooooooooooo</prosody></speak>'
+trim "$tmp/hoo-raw.wav" "$tmp/hoo.wav"
+sox "$tmp/hoo.wav" patterns/hoo.wav trim 0.45 0.25
+
+# start_s label gain
+timeline="0.40 tick 1.0
+0.95 tick 0.5
+1.50 pop 0.9
+2.10 tick 0.8
+2.45 boom 1.0
+3.30 hoo 0.8
+5.00 pop 0.6
+5.45 tick 0.9
+5.80 boom 0.7
+6.60 tick 0.4
+7.05 pop 1.0
+7.60 boom 0.5
+8.30 hoo 0.5"
+
+inputs=()
+echo "onset_s,label,end_s,gain" > beat.truth.csv
+i=0
+while read -r start label gain; do
+  src="patterns/$label.wav"
+  [ "$label" = hoo ] && src="$tmp/hoo.wav"
+  sox -v "$gain" "$src" "$tmp/part$i.wav" pad "$start"
+  len=$(soxi -D "$src")
+  if [ "$label" = hoo ]; then
+    printf '%s,%s,%.4f,%s\n' "$start" "$label" "$(echo "$start + $len" | bc -l)" "$gain" >> beat.truth.csv
+  else
+    printf '%s,%s,,%s\n' "$start" "$label" "$gain" >> beat.truth.csv
+  fi
+  inputs+=(-v 1 "$tmp/part$i.wav")
+  i=$((i + 1))
+done <<< "$timeline"
+sox -n -r "$rate" -c 1 -b 16 "$tmp/noise.wav" synth 10 whitenoise vol 0.004
+sox -m "${inputs[@]}" -v 1 "$tmp/noise.wav" -b 16 beat.wav trim 0 10
+echo "wrote $(pwd)/beat.wav and patterns/"
