@@ -21,7 +21,7 @@ pub const READ_BLOCK_FRAMES: usize = 4096;
 #[derive(Debug, thiserror::Error)]
 pub enum AnalyzeError {
     #[error("recording: {0}")]
-    Recording(#[source] AudioError),
+    Recording(AudioError),
     #[error("recording '{}' holds no audio (0 samples)", .0.display())]
     EmptyRecording(PathBuf),
     #[error(transparent)]

@@ -26,10 +26,10 @@ pub enum ChannelSelect {
 /// Errors reading audio files. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum AudioError {
-    #[error("cannot open '{}': {source}", path.display())]
+    #[error("cannot open '{}': {cause}", path.display())]
     Open {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     #[error("'{}' is not a readable WAV file: {reason}", path.display())]
     NotWav { path: PathBuf, reason: String },
@@ -85,9 +85,9 @@ fn hound_reason(err: hound::Error) -> String {
 impl WavSource {
     /// Opens `path` and checks its format and the chosen channel.
     pub fn open(path: &Path, select: ChannelSelect) -> Result<Self, AudioError> {
-        let file = File::open(path).map_err(|source| AudioError::Open {
+        let file = File::open(path).map_err(|cause| AudioError::Open {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
         let reader =
             hound::WavReader::new(BufReader::new(file)).map_err(|e| AudioError::NotWav {
@@ -114,7 +114,11 @@ impl WavSource {
             });
         }
         // A mono file has only one channel to take, whatever the choice.
-        let select = if spec.channels == 1 { ChannelSelect::Mix } else { select };
+        let select = if spec.channels == 1 {
+            ChannelSelect::Mix
+        } else {
+            select
+        };
         if let ChannelSelect::Index(wanted) = select {
             if wanted >= spec.channels {
                 return Err(AudioError::Channel {
@@ -156,7 +160,11 @@ impl WavSource {
 
     /// Reads up to `max_frames` frames as mono into `out` (cleared first). Returns the
     /// number of frames read; 0 at the end of the file.
-    pub fn read_block(&mut self, max_frames: usize, out: &mut Vec<f32>) -> Result<usize, AudioError> {
+    pub fn read_block(
+        &mut self,
+        max_frames: usize,
+        out: &mut Vec<f32>,
+    ) -> Result<usize, AudioError> {
         out.clear();
         let channels = usize::from(self.channels);
         let wanted = max_frames * channels;
@@ -286,7 +294,8 @@ impl StreamResampler {
     /// Flushes what is buffered and the resampler's delay, so that the total output is
     /// `round(consumed * to / from)` samples.
     pub fn finish(&mut self, sink: &mut dyn FnMut(&[f32], u64)) {
-        let expected = (self.consumed as f64 * f64::from(self.to) / f64::from(self.from)).round() as u64;
+        let expected =
+            (self.consumed as f64 * f64::from(self.to) / f64::from(self.from)).round() as u64;
         let partial = self.filled;
         self.run_chunk_limited(Some(partial), expected, sink);
         while self.produced < expected {
@@ -319,7 +328,10 @@ impl StreamResampler {
             partial_len: Some(n),
             ..Indexing::default()
         });
-        let written = match self.inner.process_into_buffer(&input, &mut output, indexing.as_ref()) {
+        let written = match self
+            .inner
+            .process_into_buffer(&input, &mut output, indexing.as_ref())
+        {
             Ok((_, written)) => written,
             Err(_) => {
                 debug_assert!(false, "resampler rejected its own buffers");
@@ -344,7 +356,8 @@ pub fn resample_clip(samples: &[f32], from: u32, to: u32) -> Result<Vec<f32>, Au
         return Ok(samples.to_vec());
     }
     let mut resampler = StreamResampler::new(from, to)?;
-    let mut out = Vec::with_capacity((samples.len() as f64 * f64::from(to) / f64::from(from)) as usize + 16);
+    let mut out =
+        Vec::with_capacity((samples.len() as f64 * f64::from(to) / f64::from(from)) as usize + 16);
     let mut sink = |piece: &[f32], _: u64| out.extend_from_slice(piece);
     resampler.push(samples, &mut sink);
     resampler.finish(&mut sink);

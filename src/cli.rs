@@ -42,7 +42,11 @@ pub struct PatternSource {
     #[arg(long, short = 'c', value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// A pattern to detect, repeatable; the same NAME again adds a take.
-    #[arg(long = "pattern", short = 'p', value_name = "NAME=FILE.wav[:continuous]")]
+    #[arg(
+        long = "pattern",
+        short = 'p',
+        value_name = "NAME=FILE.wav[:continuous]"
+    )]
     pub patterns: Vec<String>,
     /// Matching method (overrides the config).
     #[arg(long, value_enum)]

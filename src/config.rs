@@ -12,10 +12,10 @@ use serde::{Deserialize, Serialize};
 /// Errors in a configuration. Each names the file or key, what was expected and what was found.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("cannot read config '{}': {source}", path.display())]
+    #[error("cannot read config '{}': {cause}", path.display())]
     Read {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     #[error("config '{}' is not valid: {message}", path.display())]
     Parse { path: PathBuf, message: String },
@@ -207,9 +207,9 @@ impl Config {
     /// Reads and validates a config file. Relative take paths are resolved against the
     /// file's folder.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        let text = std::fs::read_to_string(path).map_err(|cause| ConfigError::Read {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
         Self::parse(&text, base, &format!("config '{}'", path.display())).map_err(|e| match e {
@@ -252,7 +252,11 @@ impl Config {
     /// command-line overrides.
     pub fn check_pattern_thresholds(&self, origin: &str) -> Result<(), ConfigError> {
         for p in &self.patterns {
-            check_thresholds(&format!("{origin}, pattern '{}'", p.name), p, &self.detector)?;
+            check_thresholds(
+                &format!("{origin}, pattern '{}'", p.name),
+                p,
+                &self.detector,
+            )?;
         }
         Ok(())
     }
@@ -311,7 +315,9 @@ impl RawConfig {
                 .continuous_threshold
                 .unwrap_or(defaults.continuous_threshold),
             suppression_seconds: d.suppression_seconds,
-            max_pattern_seconds: d.max_pattern_seconds.unwrap_or(defaults.max_pattern_seconds),
+            max_pattern_seconds: d
+                .max_pattern_seconds
+                .unwrap_or(defaults.max_pattern_seconds),
             channel: d.channel,
         };
         detector.validate(origin)?;
@@ -323,7 +329,10 @@ impl RawConfig {
             if patterns.iter().any(|q| q.name == p.name) {
                 return Err(invalid(
                     &item,
-                    format!("pattern name '{}' is used twice; names must be unique", p.name),
+                    format!(
+                        "pattern name '{}' is used twice; names must be unique",
+                        p.name
+                    ),
                 ));
             }
             if p.takes.is_empty() {
@@ -442,7 +451,12 @@ impl RawBounce {
         for (key, names, style, kind) in [
             ("hard", self.hard, ContactStyle::Hard, PatternKind::Impulse),
             ("soft", self.soft, ContactStyle::Soft, PatternKind::Impulse),
-            ("slide", self.slide, ContactStyle::Slide, PatternKind::Continuous),
+            (
+                "slide",
+                self.slide,
+                ContactStyle::Slide,
+                PatternKind::Continuous,
+            ),
         ] {
             for name in names {
                 let Some(p) = patterns.iter().find(|p| p.name == name) else {

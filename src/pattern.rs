@@ -19,12 +19,8 @@ pub const MIN_TAKE_SECONDS: f64 = 0.01;
 
 #[derive(Debug, thiserror::Error)]
 pub enum PatternError {
-    #[error("pattern '{pattern}': {source}")]
-    Audio {
-        pattern: String,
-        #[source]
-        source: AudioError,
-    },
+    #[error("pattern '{pattern}': {cause}")]
+    Audio { pattern: String, cause: AudioError },
     #[error("pattern '{pattern}': take '{}' {problem}", path.display())]
     BadTake {
         pattern: String,
@@ -44,7 +40,10 @@ pub struct Take {
 impl Take {
     /// Sum of squares of the samples.
     pub fn energy(&self) -> f64 {
-        self.samples.iter().map(|&x| f64::from(x) * f64::from(x)).sum()
+        self.samples
+            .iter()
+            .map(|&x| f64::from(x) * f64::from(x))
+            .sum()
     }
 }
 
@@ -105,7 +104,11 @@ impl Pattern {
 
     /// Length of the longest take, in working-rate samples.
     pub fn max_len(&self) -> usize {
-        self.takes.iter().map(|t| t.samples.len()).max().unwrap_or(0)
+        self.takes
+            .iter()
+            .map(|t| t.samples.len())
+            .max()
+            .unwrap_or(0)
     }
 }
 
@@ -117,17 +120,23 @@ pub fn load_patterns(
     specs.iter().map(|s| Pattern::load(s, settings)).collect()
 }
 
-fn load_take(pattern: &str, path: &Path, settings: &DetectorSettings) -> Result<Take, PatternError> {
+fn load_take(
+    pattern: &str,
+    path: &Path,
+    settings: &DetectorSettings,
+) -> Result<Take, PatternError> {
     let bad = |problem: String| PatternError::BadTake {
         pattern: pattern.to_string(),
         path: path.to_path_buf(),
         problem,
     };
-    let audio_err = |source| PatternError::Audio {
+    let audio_err = |cause| PatternError::Audio {
         pattern: pattern.to_string(),
-        source,
+        cause,
     };
-    let select = settings.channel.map_or(ChannelSelect::Mix, ChannelSelect::Index);
+    let select = settings
+        .channel
+        .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let mut source = WavSource::open(path, select).map_err(audio_err)?;
     let rate = source.sample_rate();
     if rate == 0 {
@@ -144,8 +153,7 @@ fn load_take(pattern: &str, path: &Path, settings: &DetectorSettings) -> Result<
     if samples.is_empty() {
         return Err(bad("holds no audio (0 samples)".into()));
     }
-    let samples =
-        audio::resample_clip(&samples, rate, settings.sample_rate).map_err(audio_err)?;
+    let samples = audio::resample_clip(&samples, rate, settings.sample_rate).map_err(audio_err)?;
     prepare_take(pattern, path, samples, settings)
 }
 

@@ -88,7 +88,10 @@ fn fft_scores_equal_the_direct_correlation() {
     let (rec, _, pats) = known_recording(0.002);
     let rec = &rec[..samples_for(3.0, RATE)];
     let patterns = build(&pats, &settings);
-    let takes: Vec<Vec<f32>> = patterns.iter().map(|p| p.takes[0].samples.clone()).collect();
+    let takes: Vec<Vec<f32>> = patterns
+        .iter()
+        .map(|p| p.takes[0].samples.clone())
+        .collect();
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
     det.enable_score_trace();
     detect_in_blocks(&mut det, rec, 1000);
@@ -102,7 +105,11 @@ fn fft_scores_equal_the_direct_correlation() {
             .zip(&trace.scores)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);
-        assert!(worst < 1e-3, "{}: FFT and direct gamma differ by {worst}", trace.pattern);
+        assert!(
+            worst < 1e-3,
+            "{}: FFT and direct gamma differ by {worst}",
+            trace.pattern
+        );
     }
 }
 
@@ -169,19 +176,37 @@ fn continuous_span_is_found_within_20_ms_at_each_end() {
     // Held sounds of 0.6, 1.5 and 0.35 s at different levels, and a tick between.
     let spans = [(0.8, 0.6, 0.9f32), (2.5, 1.5, 0.5), (5.6, 0.35, 1.0)];
     for &(at, dur, gain) in &spans {
-        place(&mut rec, &buzz(RATE, dur, 140.0), samples_for(at, RATE), gain);
+        place(
+            &mut rec,
+            &buzz(RATE, dur, 140.0),
+            samples_for(at, RATE),
+            gain,
+        );
     }
-    place(&mut rec, &noise_burst(RATE, 0.05, 0.012, 11), samples_for(4.6, RATE), 0.7);
+    place(
+        &mut rec,
+        &noise_burst(RATE, 0.05, 0.012, 11),
+        samples_for(4.6, RATE),
+        0.7,
+    );
     add_noise(&mut rec, 0.003, 8);
     let mut det = Detector::new(vec![hum, tick], &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 300);
     let hums: Vec<&Event> = events.iter().filter(|e| &*e.pattern == "hum").collect();
-    assert_eq!(hums.len(), spans.len(), "one event per held sound: {events:#?}");
+    assert_eq!(
+        hums.len(),
+        spans.len(),
+        "one event per held sound: {events:#?}"
+    );
     for (e, &(at, dur, gain)) in hums.iter().zip(&spans) {
         let end = e.end.expect("continuous events have an end");
         assert_eq!(e.kind, PatternKind::Continuous);
         assert!((e.time - at).abs() <= 0.020, "begin {:.4} vs {at}", e.time);
-        assert!((end - (at + dur)).abs() <= 0.020, "end {end:.4} vs {}", at + dur);
+        assert!(
+            (end - (at + dur)).abs() <= 0.020,
+            "end {end:.4} vs {}",
+            at + dur
+        );
         assert!(
             (e.strength - f64::from(gain)).abs() / f64::from(gain) < 0.1,
             "strength {:.3} vs gain {gain}",
@@ -232,7 +257,12 @@ fn silence_and_digital_zero_give_no_event() {
 fn mixed_scene() -> (Vec<f32>, Vec<Pattern>, DetectorSettings) {
     let settings = DetectorSettings::default();
     let (mut rec, _, pats) = known_recording(0.002);
-    place(&mut rec, &buzz(RATE, 0.9, 140.0), samples_for(10.6, RATE), 0.6);
+    place(
+        &mut rec,
+        &buzz(RATE, 0.9, 140.0),
+        samples_for(10.6, RATE),
+        0.6,
+    );
     let mut patterns = build(&pats, &settings);
     patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
     (rec, patterns, settings)
@@ -246,7 +276,11 @@ fn block_size_does_not_change_any_event() {
         detect_in_blocks(&mut det, &rec, block)
     };
     let reference = run(rec.len());
-    assert!(reference.len() > 20, "the scene has events: {}", reference.len());
+    assert!(
+        reference.len() > 20,
+        "the scene has events: {}",
+        reference.len()
+    );
     assert!(reference.iter().any(|e| e.end.is_some()));
     for block in [1, 64, 256, 1000, 1024, 4096] {
         assert_eq!(run(block), reference, "block size {block}");
@@ -274,6 +308,9 @@ fn resampled_input_gives_the_same_events_at_any_block_size() {
     for (a, b) in native.iter().zip(&reference) {
         assert_eq!(a.pattern, b.pattern);
         assert!((a.time - b.time).abs() < 0.001, "{a:?} vs {b:?}");
-        assert!((a.strength - b.strength).abs() / a.strength < 0.1, "{a:?} vs {b:?}");
+        assert!(
+            (a.strength - b.strength).abs() / a.strength < 0.1,
+            "{a:?} vs {b:?}"
+        );
     }
 }

@@ -44,7 +44,11 @@ fn config_for(dir: &Path, tick: &[f32], pop: &[f32]) -> Config {
 
 fn assert_truth(path: &Path, config: &Config, tolerance: f64) {
     let analysis = analyze_file(path, config).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let found: Vec<(&str, f64)> = analysis.events.iter().map(|e| (&*e.pattern, e.time)).collect();
+    let found: Vec<(&str, f64)> = analysis
+        .events
+        .iter()
+        .map(|e| (&*e.pattern, e.time))
+        .collect();
     assert_eq!(found.len(), TRUTH.len(), "{}: {found:?}", path.display());
     for ((name, time), (want_name, want_time)) in found.iter().zip(TRUTH) {
         assert_eq!(*name, want_name, "{}: {found:?}", path.display());
@@ -91,7 +95,10 @@ fn stereo_is_mixed_down_or_one_channel_is_taken() {
     assert!(noise_only.events.is_empty(), "{:?}", noise_only.events);
     config.detector.channel = Some(2);
     let err = analyze_file(&path, &config).unwrap_err().to_string();
-    assert!(err.contains("has 2 channel(s); channel 2 does not exist"), "{err}");
+    assert!(
+        err.contains("has 2 channel(s); channel 2 does not exist"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -129,7 +136,10 @@ fn load_error(dir: &Path, file: &str, settings: &DetectorSettings) -> String {
         Err(e) => {
             let text = format!("{e}");
             assert!(text.contains(file), "the message names the file: {text}");
-            assert!(text.contains("pattern 'tick'"), "the message names the pattern: {text}");
+            assert!(
+                text.contains("pattern 'tick'"),
+                "the message names the pattern: {text}"
+            );
             let _: &PatternError = &e;
             text
         }
@@ -148,16 +158,27 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     let msg = load_error(&dir, "empty.wav", &settings);
     assert!(msg.contains("holds no audio (0 samples)"), "{msg}");
 
-    std::fs::write(dir.join("garbage.wav"), b"this is not a wave file at all, just text").unwrap();
+    std::fs::write(
+        dir.join("garbage.wav"),
+        b"this is not a wave file at all, just text",
+    )
+    .unwrap();
     let msg = load_error(&dir, "garbage.wav", &settings);
     assert!(msg.contains("is not a readable WAV file"), "{msg}");
 
     // A real WAV cut short in the middle of its data: the header promises more.
-    write_wav_f32(&dir.join("full.wav"), &noise_burst(RATE, 0.2, 0.05, 3), RATE);
+    write_wav_f32(
+        &dir.join("full.wav"),
+        &noise_burst(RATE, 0.2, 0.05, 3),
+        RATE,
+    );
     let bytes = std::fs::read(dir.join("full.wav")).unwrap();
     std::fs::write(dir.join("truncated.wav"), &bytes[..bytes.len() / 2 + 1]).unwrap();
     let msg = load_error(&dir, "truncated.wav", &settings);
-    assert!(msg.contains("is corrupt: reading frame") && msg.contains("ends before its header says"), "{msg}");
+    assert!(
+        msg.contains("is corrupt: reading frame") && msg.contains("ends before its header says"),
+        "{msg}"
+    );
     // The frame named is where the data stops, not the start of the block.
     assert!(!msg.contains("reading frame 0 "), "{msg}");
 
@@ -169,17 +190,30 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     add_noise(&mut hiss, 0.0001, 5);
     write_wav_f32(&dir.join("hiss.wav"), &hiss, RATE);
     let msg = load_error(&dir, "hiss.wav", &settings);
-    assert!(msg.contains("is silent (peak -") && msg.contains("louder than -60 dBFS"), "{msg}");
+    assert!(
+        msg.contains("is silent (peak -") && msg.contains("louder than -60 dBFS"),
+        "{msg}"
+    );
 
-    write_wav_f32(&dir.join("long.wav"), &noise_burst(RATE, 12.0, 100.0, 4), RATE);
+    write_wav_f32(
+        &dir.join("long.wav"),
+        &noise_burst(RATE, 12.0, 100.0, 4),
+        RATE,
+    );
     let msg = load_error(&dir, "long.wav", &settings);
-    assert!(msg.contains("is 12.0 s long") && msg.contains("at most 5 s"), "{msg}");
+    assert!(
+        msg.contains("is 12.0 s long") && msg.contains("at most 5 s"),
+        "{msg}"
+    );
 
     let mut click = vec![0.0f32; 2000];
     click[1000..1060].copy_from_slice(&noise_burst(RATE, 0.0028, 1.0, 6)[..60].to_vec());
     write_wav_f32(&dir.join("click.wav"), &click, RATE);
     let msg = load_error(&dir, "click.wav", &settings);
-    assert!(msg.contains("after trimming silence") && msg.contains("at least 10 ms"), "{msg}");
+    assert!(
+        msg.contains("after trimming silence") && msg.contains("at least 10 ms"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -207,15 +241,28 @@ fn bad_recordings_are_refused_with_the_file_and_the_reason() {
     let err = analyze_file(&dir.join("nope.wav"), &config).unwrap_err();
     assert!(matches!(err, AnalyzeError::Recording(_)));
     let msg = err.to_string();
-    assert!(msg.contains("nope.wav") && msg.contains("cannot open"), "{msg}");
+    assert!(
+        msg.contains("nope.wav") && msg.contains("cannot open"),
+        "{msg}"
+    );
 
     write_wav_f32(&dir.join("empty.wav"), &[], RATE);
-    let msg = analyze_file(&dir.join("empty.wav"), &config).unwrap_err().to_string();
-    assert!(msg.contains("empty.wav") && msg.contains("holds no audio"), "{msg}");
+    let msg = analyze_file(&dir.join("empty.wav"), &config)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("empty.wav") && msg.contains("holds no audio"),
+        "{msg}"
+    );
 
     std::fs::write(dir.join("text.wav"), "RIFF but not really").unwrap();
-    let msg = analyze_file(&dir.join("text.wav"), &config).unwrap_err().to_string();
-    assert!(msg.contains("text.wav") && msg.contains("not a readable WAV"), "{msg}");
+    let msg = analyze_file(&dir.join("text.wav"), &config)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("text.wav") && msg.contains("not a readable WAV"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -223,7 +270,11 @@ fn a_silent_recording_is_analysed_and_gives_no_event() {
     let dir = temp_dir("silent-recording");
     let (_, tick, pop) = scene();
     let config = config_for(&dir, &tick, &pop);
-    write_wav_f32(&dir.join("quiet.wav"), &vec![0.0; samples_for(2.0, RATE)], RATE);
+    write_wav_f32(
+        &dir.join("quiet.wav"),
+        &vec![0.0; samples_for(2.0, RATE)],
+        RATE,
+    );
     let analysis = analyze_file(&dir.join("quiet.wav"), &config).unwrap();
     assert!(analysis.events.is_empty());
     assert!((analysis.duration - 2.0).abs() < 1e-9);

@@ -162,9 +162,7 @@ mod tests {
 
     #[test]
     fn sliding_max_matches_brute_force() {
-        let data: Vec<f32> = (0..500)
-            .map(|i| ((i * 7919) % 101) as f32 - 50.0)
-            .collect();
+        let data: Vec<f32> = (0..500).map(|i| ((i * 7919) % 101) as f32 - 50.0).collect();
         for width in [1, 2, 5, 33] {
             let mut m = SlidingMax::new(width);
             for (i, &v) in data.iter().enumerate() {

@@ -32,7 +32,10 @@ pub struct Event {
     #[serde(serialize_with = "seconds")]
     pub time: f64,
     /// End of a continuous instance.
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_seconds")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "opt_seconds"
+    )]
     pub end: Option<f64>,
     /// sqrt(energy(x) / energy(pattern)) over the instance (per sample for continuous
     /// instances): 1 for the pattern at its enrolled level.

@@ -155,7 +155,12 @@ impl WaveformMatcher {
     /// `settings.sample_rate`.
     pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings) -> Self {
         let rate = f64::from(settings.sample_rate);
-        let max_len = patterns.iter().map(Pattern::max_len).max().unwrap_or(1).max(1);
+        let max_len = patterns
+            .iter()
+            .map(Pattern::max_len)
+            .max()
+            .unwrap_or(1)
+            .max(1);
         let fft_len = (FFT_LEN_PER_TAKE_LEN * max_len)
             .next_power_of_two()
             .max(MIN_FFT_LEN);
@@ -235,8 +240,8 @@ impl WaveformMatcher {
         let max_half_window = templates.iter().map(|t| t.half_window).max().unwrap_or(0);
         // Peaks live for about 2 suppression windows plus a segment; local maxima are at
         // least 2 samples apart. Bounded so a pathological input cannot reserve gigabytes.
-        let peak_capacity = (templates.len() * (2 * max_half_window as usize + hop + 4) / 2)
-            .clamp(64, 1 << 16);
+        let peak_capacity =
+            (templates.len() * (2 * max_half_window as usize + hop + 4) / 2).clamp(64, 1 << 16);
         let frame_capacity =
             (3 * max_len + 2 * hop + 4 * (envelope_len + average_len)) / frame_len + 16;
 
@@ -350,7 +355,13 @@ impl WaveformMatcher {
         for slot in 0..self.trackers.len() {
             let tracker = &mut self.trackers[slot];
             if let Some(open) = tracker.open.take() {
-                push_closing(tracker, SpanClosing { open, end_pos: end.saturating_sub(1) });
+                push_closing(
+                    tracker,
+                    SpanClosing {
+                        open,
+                        end_pos: end.saturating_sub(1),
+                    },
+                );
             }
             self.finalize_spans(slot, out, true);
         }
@@ -386,7 +397,10 @@ impl WaveformMatcher {
             &mut self.scratch_forward,
         );
         for tracker in &mut self.trackers {
-            tracker.score.iter_mut().for_each(|s| *s = f32::NEG_INFINITY);
+            tracker
+                .score
+                .iter_mut()
+                .for_each(|s| *s = f32::NEG_INFINITY);
         }
 
         for (ti, tmpl) in self.templates.iter_mut().enumerate() {
@@ -412,12 +426,14 @@ impl WaveformMatcher {
             let mut trace = trace;
             for k in 0..hop {
                 let energy = self.prefix_energy[k + tmpl.len] - self.prefix_energy[k];
-                let gamma = (f64::from(self.corr[k]) / energy.max(tmpl.silence_floor).sqrt()) as f32;
+                let gamma =
+                    (f64::from(self.corr[k]) / energy.max(tmpl.silence_floor).sqrt()) as f32;
                 if let Some(tr) = trace.as_mut() {
                     tr.push(gamma);
                 }
                 let t = seg_start + k as u64;
-                if tmpl.prev > tmpl.prev_prev && tmpl.prev >= gamma && tmpl.prev > is_impulse_floor {
+                if tmpl.prev > tmpl.prev_prev && tmpl.prev >= gamma && tmpl.prev > is_impulse_floor
+                {
                     if self.peaks.len() < self.peaks.capacity() {
                         self.peaks.push(Peak {
                             template: ti,
@@ -550,7 +566,13 @@ impl WaveformMatcher {
                 }
                 Some(_) => {
                     if let Some(open) = tracker.open.take() {
-                        push_closing(tracker, SpanClosing { open, end_pos: c.saturating_sub(1) });
+                        push_closing(
+                            tracker,
+                            SpanClosing {
+                                open,
+                                end_pos: c.saturating_sub(1),
+                            },
+                        );
                     }
                 }
             }
@@ -562,12 +584,17 @@ impl WaveformMatcher {
     fn place_begin(&self, c: u64, max_len: u64) -> u64 {
         let f = self.frames.frame_len() as u64;
         let lo = (c.saturating_sub(self.envelope_len) / f).max(self.frames.oldest());
-        let hi = ((c + max_len + self.envelope_len) / f).min(self.frames.complete().saturating_sub(1));
+        let hi =
+            ((c + max_len + self.envelope_len) / f).min(self.frames.complete().saturating_sub(1));
         let loudest = (lo..=hi)
             .filter_map(|i| self.frames.frame(i))
             .fold(0.0f64, f64::max);
         (lo..=hi)
-            .find(|&i| self.frames.frame(i).is_some_and(|e| e >= loudest * SPAN_LEVEL_RATIO && e > 0.0))
+            .find(|&i| {
+                self.frames
+                    .frame(i)
+                    .is_some_and(|e| e >= loudest * SPAN_LEVEL_RATIO && e > 0.0)
+            })
             .map_or(c, |i| i * f)
     }
 
@@ -591,7 +618,11 @@ impl WaveformMatcher {
             if open.best_score <= high {
                 continue;
             }
-            let lo = (closing.end_pos.saturating_sub(max_len).max(open.begin_sample) / f)
+            let lo = (closing
+                .end_pos
+                .saturating_sub(max_len)
+                .max(open.begin_sample)
+                / f)
                 .max(self.frames.oldest());
             let hi = (search_hi_sample / f).min(available.saturating_sub(1));
             let loudest = (lo..=hi)
@@ -600,7 +631,11 @@ impl WaveformMatcher {
             let first_end_frame = (closing.end_pos / f).max(lo);
             let end_frame = (first_end_frame..=hi)
                 .rev()
-                .find(|&i| self.frames.frame(i).is_some_and(|e| e >= loudest * SPAN_LEVEL_RATIO && e > 0.0))
+                .find(|&i| {
+                    self.frames
+                        .frame(i)
+                        .is_some_and(|e| e >= loudest * SPAN_LEVEL_RATIO && e > 0.0)
+                })
                 .unwrap_or(first_end_frame);
             let end_sample = ((end_frame + 1) * f).max(open.begin_sample + f);
             let span_energy = self
@@ -641,10 +676,17 @@ pub fn direct_ncc(signal: &[f32], pattern: &[f32]) -> Vec<f32> {
     if m == 0 || signal.len() < m {
         return Vec::new();
     }
-    let norm = pattern.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>().sqrt();
+    let norm = pattern
+        .iter()
+        .map(|&x| f64::from(x) * f64::from(x))
+        .sum::<f64>()
+        .sqrt();
     let floor_rms = 10f64.powf(SILENCE_FLOOR_DBFS / 20.0);
     let floor = m as f64 * floor_rms * floor_rms;
-    let mut window_energy: f64 = signal[..m].iter().map(|&x| f64::from(x) * f64::from(x)).sum();
+    let mut window_energy: f64 = signal[..m]
+        .iter()
+        .map(|&x| f64::from(x) * f64::from(x))
+        .sum();
     let mut out = Vec::with_capacity(signal.len() - m + 1);
     for t in 0..=signal.len() - m {
         if t > 0 {

@@ -155,8 +155,7 @@ pub fn impulse(name: &str, samples: Vec<f32>, settings: &DetectorSettings) -> Pa
 }
 
 pub fn continuous(name: &str, samples: Vec<f32>, settings: &DetectorSettings) -> Pattern {
-    Pattern::from_samples(name, PatternKind::Continuous, vec![samples], settings)
-        .expect("pattern")
+    Pattern::from_samples(name, PatternKind::Continuous, vec![samples], settings).expect("pattern")
 }
 
 /// The three impulse patterns most tests use: distinct, realistic lengths.

@@ -1,0 +1,334 @@
+//! The `onomato` binary on the bundled example: output contracts (JSON on stdout and
+//! nothing else, CSV), the bounce array, `check`, and the exit codes and messages of
+//! mistakes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn onomato(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run onomato")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8(o.stdout.clone()).expect("utf-8 stdout")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8(o.stderr.clone()).expect("utf-8 stderr")
+}
+
+struct Truth {
+    onset: f64,
+    label: String,
+    end: Option<f64>,
+    gain: f64,
+}
+
+/// examples/beat.truth.csv, written by examples/make-example.sh from its timeline.
+fn truth() -> Vec<Truth> {
+    let text = std::fs::read_to_string(root().join("examples/beat.truth.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            Truth {
+                onset: f[0].parse().unwrap(),
+                label: f[1].to_string(),
+                end: (!f[2].is_empty()).then(|| f[2].parse().unwrap()),
+                gain: f[3].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+fn analyze_example(extra: &[&str]) -> Value {
+    let mut args = vec![
+        "analyze",
+        "examples/beat.wav",
+        "--config",
+        "config/onomato.toml",
+    ];
+    args.extend_from_slice(extra);
+    let out = onomato(&args);
+    assert!(out.status.success(), "stderr: {}", stderr(&out));
+    serde_json::from_str(&stdout(&out)).expect("stdout is one JSON document")
+}
+
+#[test]
+fn analyze_prints_only_the_events_object_and_finds_the_example() {
+    let json = analyze_example(&[]);
+    let obj = json.as_object().unwrap();
+    assert_eq!(obj.keys().collect::<Vec<_>>(), ["events"]);
+    let events = json["events"].as_array().unwrap();
+    let truth = truth();
+    assert_eq!(events.len(), truth.len(), "{json:#}");
+    for (i, e) in events.iter().enumerate() {
+        assert_eq!(e["id"].as_u64(), Some(i as u64), "ids count up in order");
+        let time = e["time"].as_f64().unwrap();
+        let t = truth
+            .iter()
+            .find(|t| (t.onset - time).abs() < 0.1)
+            .unwrap_or_else(|| panic!("event {e} matches nothing placed"));
+        assert_eq!(e["pattern"], t.label.as_str());
+        let strength = e["strength"].as_f64().unwrap();
+        assert!(e["emitted_at"].as_f64().unwrap() >= time);
+        match t.end {
+            None => {
+                assert_eq!(e["kind"], "impulse");
+                assert!(e.get("end").is_none(), "impulses have no end: {e}");
+                assert!((time - t.onset).abs() <= 0.002, "{e} vs {}", t.onset);
+                assert!(
+                    (strength - t.gain).abs() / t.gain < 0.03,
+                    "{e} vs gain {}",
+                    t.gain
+                );
+            }
+            Some(end) => {
+                assert_eq!(e["kind"], "continuous");
+                // The held sound opens with an unvoiced "h", which cannot correlate
+                // with the voiced pattern: the span starts where the vowel does.
+                assert!(
+                    time >= t.onset && time - t.onset <= 0.1,
+                    "{e} vs {}",
+                    t.onset
+                );
+                let got_end = e["end"].as_f64().unwrap();
+                assert!((got_end - end).abs() <= 0.02, "{e} vs end {end}");
+                assert!(
+                    (strength - t.gain).abs() / t.gain < 0.1,
+                    "{e} vs gain {}",
+                    t.gain
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn analyze_csv_has_a_header_and_a_row_per_event() {
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--format",
+        "csv",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("id,pattern,kind,time,end,strength,score,emitted_at")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), truth().len());
+    assert!(rows.iter().all(|r| r.len() == 8));
+    let held: Vec<&Vec<&str>> = rows.iter().filter(|r| r[2] == "continuous").collect();
+    assert_eq!(held.len(), 2);
+    assert!(held.iter().all(|r| !r[4].is_empty()));
+    assert!(rows
+        .iter()
+        .filter(|r| r[2] == "impulse")
+        .all(|r| r[4].is_empty()));
+}
+
+#[test]
+fn bounce_adds_contacts_whose_flights_land_on_the_next_contact() {
+    let json = analyze_example(&["--bounce", "--gravity", "9.81"]);
+    let contacts = json["bounce"].as_array().expect("a bounce array");
+    let events = json["events"].as_array().unwrap();
+    assert_eq!(
+        contacts.len(),
+        events.len(),
+        "every example sound is a contact"
+    );
+    for pair in contacts.windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        let launch = a["end"].as_f64().unwrap();
+        let next = b["time"].as_f64().unwrap();
+        let v = a["launch_velocity"].as_f64().unwrap();
+        assert!((v - 9.81 * (next - launch) / 2.0).abs() < 1e-3, "{a}");
+        assert_eq!(a["landing_time"].as_f64(), Some(next));
+    }
+    let styles: Vec<&str> = contacts
+        .iter()
+        .map(|c| c["style"].as_str().unwrap())
+        .collect();
+    assert!(styles.contains(&"soft") && styles.contains(&"slide") && styles.contains(&"hard"));
+    let last = contacts.last().unwrap();
+    assert_eq!(last["launch_velocity"].as_f64(), Some(0.0));
+    assert!(last["landing_time"].is_null());
+}
+
+#[test]
+fn patterns_can_be_given_on_the_command_line() {
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "--pattern",
+        "tick=examples/patterns/tick.wav",
+        "--pattern",
+        "hoo=examples/patterns/hoo.wav:continuous",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let labels: Vec<&str> = json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["pattern"].as_str().unwrap())
+        .collect();
+    let want_ticks = truth().iter().filter(|t| t.label == "tick").count();
+    assert_eq!(
+        labels.iter().filter(|l| **l == "tick").count(),
+        want_ticks,
+        "{labels:?}"
+    );
+    assert_eq!(
+        labels.iter().filter(|l| **l == "hoo").count(),
+        2,
+        "{labels:?}"
+    );
+    assert_eq!(labels.len(), want_ticks + 2, "{labels:?}");
+}
+
+#[test]
+fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "--pattern",
+                "tick=missing.wav",
+            ],
+            "pattern 'tick': cannot open 'missing.wav'",
+        ),
+        (
+            &["analyze", "examples/beat.wav"],
+            "no patterns to detect: give --pattern NAME=FILE.wav",
+        ),
+        (
+            &[
+                "analyze",
+                "nothing.wav",
+                "-p",
+                "tick=examples/patterns/tick.wav",
+            ],
+            "recording: cannot open 'nothing.wav'",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--method",
+                "spectral",
+            ],
+            "the spectral method is not available yet; use --method waveform",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--bounce",
+                "--format",
+                "csv",
+            ],
+            "cannot be used with --format csv",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--threshold",
+                "3",
+            ],
+            "threshold must be greater than 0 and at most 1, found 3",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--gravity",
+                "0",
+            ],
+            "--gravity must be a positive number",
+        ),
+        (
+            &["analyze", "examples/beat.wav", "-p", "tick"],
+            "--pattern 'tick': expected NAME=FILE.wav",
+        ),
+        (
+            &["check", "--config", "config/missing.toml"],
+            "cannot read config 'config/missing.toml'",
+        ),
+    ];
+    for (args, wanted) in cases {
+        let out = onomato(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains(wanted),
+            "{args:?}: expected {wanted:?} in {}",
+            stderr(&out)
+        );
+        assert!(stdout(&out).is_empty(), "{args:?} printed on stdout");
+        assert!(!stderr(&out).contains("panicked"), "{args:?}");
+    }
+}
+
+#[test]
+fn check_accepts_the_example_and_refuses_a_broken_config() {
+    let out = onomato(&["check", "--config", "config/onomato.toml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("configuration is valid"));
+    assert!(stderr(&out).contains("pattern 'hoo' (continuous): 1 take(s)"));
+
+    let dir = std::env::temp_dir().join(format!("onomato-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let broken = dir.join("broken.toml");
+    std::fs::write(
+        &broken,
+        "[[pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\nthreshhold = 0.6\n",
+    )
+    .unwrap();
+    let out = onomato(&["check", "--config", broken.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("unknown field `threshhold`"),
+        "{}",
+        stderr(&out)
+    );
+
+    // Valid TOML whose take file does not exist: check loads the takes too.
+    std::fs::write(
+        &broken,
+        "[[pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\n",
+    )
+    .unwrap();
+    let out = onomato(&["check", "--config", broken.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let want = format!(
+        "cannot open '{}'",
+        Path::new(&dir).join("tick.wav").display()
+    );
+    assert!(stderr(&out).contains(&want), "{}", stderr(&out));
+}

@@ -1,0 +1,152 @@
+//! The configuration: the shipped example loads (it is a fixture, so it cannot go
+//! stale), and every mistake is an error naming the key, the expected and the found value.
+
+use std::path::Path;
+
+use onomato::config::{parse_pattern_args, Config, ContactStyle, Method, PatternKind};
+use onomato::pattern::load_patterns;
+
+fn parse_err(text: &str) -> String {
+    match Config::parse(text, Path::new("."), "config 'test.toml'") {
+        Ok(c) => panic!("accepted: {c:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const TICK: &str = "[[pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\n";
+
+#[test]
+fn the_example_config_loads_with_its_patterns() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/onomato.toml");
+    let config = Config::load(&path).expect("example config is valid");
+    assert_eq!(config.detector.method, Method::Waveform);
+    assert_eq!(config.detector.sample_rate, 22_050);
+    let names: Vec<&str> = config.patterns.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["tick", "pop", "boom", "hoo"]);
+    assert_eq!(config.patterns[3].kind, PatternKind::Continuous);
+    let bounce = config.bounce.as_ref().expect("example has [bounce]");
+    assert_eq!(bounce.styles["pop"], ContactStyle::Soft);
+    assert_eq!(bounce.styles["hoo"], ContactStyle::Slide);
+    // Its take paths are relative to the config file, and the files are there.
+    let patterns =
+        load_patterns(&config.patterns, &config.detector).expect("example patterns load");
+    assert_eq!(patterns.len(), 4);
+}
+
+#[test]
+fn unknown_keys_are_errors_that_name_the_key() {
+    let msg = parse_err("[detector]\ntreshold = 0.5\n");
+    assert!(
+        msg.contains("unknown field `treshold`") && msg.contains("expected one of"),
+        "{msg}"
+    );
+    let msg = parse_err(&format!("{TICK}colour = \"red\"\n"));
+    assert!(msg.contains("unknown field `colour`"), "{msg}");
+    let msg = parse_err("[output]\nosc = 1\n");
+    assert!(msg.contains("unknown field `output`"), "{msg}");
+    let msg = parse_err(&format!("{TICK}[bounce]\ngravty = 3\n"));
+    assert!(msg.contains("unknown field `gravty`"), "{msg}");
+    assert!(
+        msg.contains("test.toml"),
+        "the message names the file: {msg}"
+    );
+}
+
+#[test]
+fn bad_values_name_the_item_and_what_was_expected_and_found() {
+    let cases: &[(&str, &[&str])] = &[
+        ("[detector]\nmethod = \"fourier\"\n", &["unknown variant `fourier`", "`waveform`"]),
+        ("[detector]\nthreshold = 1.5\n", &["[detector]", "threshold must be greater than 0 and at most 1, found 1.5"]),
+        ("[detector]\nsample_rate = 4000\n", &["sample_rate must be between 8000 and 192000 Hz, found 4000"]),
+        ("[detector]\nsample_rate = \"fast\"\n", &["invalid type", "expected u32"]),
+        ("[detector]\nmax_pattern_seconds = 0\n", &["max_pattern_seconds must be between 0.05 and 60, found 0"]),
+        ("[detector]\nsuppression_seconds = -1\n", &["suppression_seconds must be between 0 and 5, found -1"]),
+        (&format!("{TICK}threshold = 0\n"), &["pattern #1 ('tick')", "threshold must be greater than 0 and at most 1, found 0"]),
+        ("[[pattern]]\nname = \"tick\"\ntakes = []\n", &["pattern #1 ('tick')", "takes is empty; expected at least one WAV file"]),
+        ("[[pattern]]\nname = \"tick\"\n", &["missing field `takes`"]),
+        ("[[pattern]]\nname = \"my tick\"\ntakes = [\"a.wav\"]\n", &["letters, digits", "found 'my tick'"]),
+        ("[[pattern]]\nname = \"a/b\"\ntakes = [\"a.wav\"]\n", &["found 'a/b'"]),
+        (&format!("{TICK}{TICK}"), &["pattern #2 ('tick')", "is used twice"]),
+        ("[[pattern]]\nname = \"x\"\nkind = \"held\"\ntakes = [\"a.wav\"]\n", &["unknown variant `held`", "`impulse`", "`continuous`"]),
+        (&format!("{TICK}continuous_threshold = 0.2\n"), &["only for kind = \"continuous\""]),
+        ("[[pattern]]\nname = \"hum\"\nkind = \"continuous\"\ntakes = [\"a.wav\"]\nthreshold = 0.4\ncontinuous_threshold = 0.6\n", &["pattern #1 ('hum')", "continuous_threshold (0.6) must not be above threshold (0.4)"]),
+        (&format!("{TICK}[bounce]\nhard = [\"pop\"]\n"), &["[bounce]", "hard names pattern 'pop', which is not defined"]),
+        (&format!("{TICK}[bounce]\nslide = [\"tick\"]\n"), &["slide expects continuous patterns, but 'tick' is impulse"]),
+        (&format!("{TICK}[bounce]\nhard = [\"tick\"]\nsoft = [\"tick\"]\n"), &["'tick' is given more than one contact style"]),
+        (&format!("{TICK}[bounce]\ngravity = -9.81\n"), &["gravity must be a positive number (m/s²), found -9.81"]),
+        (&format!("{TICK}[bounce]\nmax_squash = 1.5\n"), &["max_squash must be at least 0 and below 1, found 1.5"]),
+    ];
+    for (text, wanted) in cases {
+        let msg = parse_err(text);
+        for w in *wanted {
+            assert!(msg.contains(w), "for {text:?}\nexpected {w:?} in: {msg}");
+        }
+    }
+}
+
+#[test]
+fn a_missing_config_file_is_named() {
+    let msg = Config::load(Path::new("no/such/onomato.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("cannot read config 'no/such/onomato.toml'"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn take_paths_are_relative_to_the_config_file() {
+    let config = Config::parse(TICK, Path::new("/srv/voice"), "x").unwrap();
+    assert_eq!(
+        config.patterns[0].takes[0],
+        Path::new("/srv/voice/tick.wav")
+    );
+}
+
+#[test]
+fn pattern_arguments_parse_and_repeat_names_add_takes() {
+    let args: Vec<String> = ["tick=a.wav", "hum=b.wav:continuous", "tick=c.wav:impulse"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let specs = parse_pattern_args(&args).unwrap();
+    assert_eq!(specs.len(), 2);
+    assert_eq!(specs[0].name, "tick");
+    assert_eq!(specs[0].takes, [Path::new("a.wav"), Path::new("c.wav")]);
+    assert_eq!(specs[1].kind, PatternKind::Continuous);
+    assert_eq!(specs[1].takes, [Path::new("b.wav")]);
+}
+
+#[test]
+fn bad_pattern_arguments_are_explained() {
+    let err = |a: &[&str]| {
+        let args: Vec<String> = a.iter().map(|s| s.to_string()).collect();
+        parse_pattern_args(&args).unwrap_err().to_string()
+    };
+    let msg = err(&["tick.wav"]);
+    assert!(
+        msg.contains("--pattern 'tick.wav'") && msg.contains("expected NAME=FILE.wav"),
+        "{msg}"
+    );
+    let msg = err(&["tick="]);
+    assert!(msg.contains("file name after '=' is empty"), "{msg}");
+    let msg = err(&["=a.wav"]);
+    assert!(msg.contains("found ''"), "{msg}");
+    let msg = err(&["hum=a.wav:continuous", "hum=b.wav"]);
+    assert!(
+        msg.contains("given as continuous before, and as impulse here"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn command_line_patterns_may_not_reuse_a_config_name() {
+    let mut config = Config::parse(TICK, Path::new("."), "x").unwrap();
+    let specs = parse_pattern_args(&["tick=other.wav".to_string()]).unwrap();
+    let msg = config.add_cli_patterns(specs).unwrap_err().to_string();
+    assert!(
+        msg.contains("pattern 'tick' is already defined in the config"),
+        "{msg}"
+    );
+}
