@@ -34,7 +34,7 @@ const SILENCE_FLOOR_DBFS: f64 = -70.0;
 /// Smallest FFT segment.
 const MIN_FFT_LEN: usize = 1024;
 /// Segment length as a multiple of the longest take (then rounded up to a power of two).
-const FFT_LEN_PER_TAKE_LEN: usize = 4;
+const FFT_LEN_PER_TAKE_LEN: usize = 2;
 const ENVELOPE_SECONDS: f64 = 0.020;
 const AVERAGE_SECONDS: f64 = 0.030;
 const FRAME_SECONDS: f64 = 0.0025;
@@ -61,6 +61,7 @@ struct Template {
     spectrum: Vec<Complex32>,
     silence_floor: f64,
     half_window: u64,
+    /// Signed squared score q at the last two positions of the previous segment.
     prev: f32,
     prev_prev: f32,
     prev_energy: f64,
@@ -131,6 +132,8 @@ pub struct WaveformMatcher {
     spectrum: Vec<Complex32>,
     product: Vec<Complex32>,
     corr: Vec<f32>,
+    /// Signed squared score of the current take over the hop.
+    gamma: Vec<f32>,
     scratch_forward: Vec<Complex32>,
     scratch_inverse: Vec<Complex32>,
     prefix_energy: Vec<f64>,
@@ -255,6 +258,7 @@ impl WaveformMatcher {
             spectrum: forward.make_output_vec(),
             product: forward.make_output_vec(),
             corr: inverse.make_output_vec(),
+            gamma: vec![0.0; hop],
             fft_in: forward.make_input_vec(),
             forward,
             inverse,
@@ -340,12 +344,15 @@ impl WaveformMatcher {
         let end = self.consumed;
         self.emit_limit = end;
         let first = out.len();
-        let target = end
-            + self.max_half_window
-            + self.span_delay
-            + self.max_len as u64
-            + self.envelope_len
-            + 2;
+        // Impulses need gamma up to their suppression window (+2 to confirm the last
+        // local maximum); continuous spans also need the smoothing delay and the frames
+        // searched for their end.
+        let spans_need = if self.trackers.is_empty() {
+            0
+        } else {
+            self.span_delay + self.max_len as u64 + self.envelope_len
+        };
+        let target = end + self.max_half_window.max(spans_need) + 2;
         const ZEROS: [f32; 256] = [0.0; 256];
         while self.computed < target {
             let need = (self.fft_len - self.filled).min(ZEROS.len());
@@ -385,10 +392,7 @@ impl WaveformMatcher {
         let hop = self.hop;
         let seg_start = self.seg_start;
         // Window energies from prefix sums (f64: no drift, recomputed every segment).
-        self.prefix_energy[0] = 0.0;
-        for (i, &x) in self.segment.iter().enumerate() {
-            self.prefix_energy[i + 1] = self.prefix_energy[i] + f64::from(x) * f64::from(x);
-        }
+        prefix_squares(&self.segment, &mut self.prefix_energy);
         self.fft_in.copy_from_slice(&self.segment);
         // Buffer lengths come from the plan, so the transform cannot fail.
         let _ = self.forward.process_with_scratch(
@@ -421,42 +425,88 @@ impl WaveformMatcher {
                 &mut self.corr,
                 &mut self.scratch_inverse,
             );
-            let is_impulse_floor = self.peak_floor;
-            let trace = self.trace.as_mut().map(|t| &mut t[ti].scores);
-            let mut trace = trace;
-            for k in 0..hop {
-                let energy = self.prefix_energy[k + tmpl.len] - self.prefix_energy[k];
-                let gamma =
-                    (f64::from(self.corr[k]) / energy.max(tmpl.silence_floor).sqrt()) as f32;
-                if let Some(tr) = trace.as_mut() {
-                    tr.push(gamma);
+            // gamma for the hop, in a loop of its own so that it vectorises.
+            // Signed squared score q = c·|c| / E = sign(gamma)·gamma²: same order as
+            // gamma, so peaks and thresholds (squared) are found on q without a square
+            // root. The prefix sums are subtracted in f64 (that is where precision is
+            // lost); the window energy itself is well within f32's precision.
+            let floor = tmpl.silence_floor as f32;
+            let energies = self.prefix_energy[tmpl.len..tmpl.len + hop]
+                .iter()
+                .zip(&self.prefix_energy[..hop]);
+            for ((q, &c), (&hi, &lo)) in self.gamma.iter_mut().zip(&self.corr[..hop]).zip(energies)
+            {
+                *q = c * c.abs() / ((hi - lo) as f32).max(floor);
+            }
+            let score2 = &self.gamma[..hop];
+            let need_gamma = self.trace.is_some() || tmpl.continuous_slot.is_some();
+            if need_gamma {
+                for (g, &q) in self.corr[..hop].iter_mut().zip(score2) {
+                    *g = q.abs().sqrt().copysign(q);
                 }
-                let t = seg_start + k as u64;
-                if tmpl.prev > tmpl.prev_prev && tmpl.prev >= gamma && tmpl.prev > is_impulse_floor
-                {
+            }
+            let gamma = &self.corr[..hop];
+            if let Some(trace) = self.trace.as_mut() {
+                trace[ti].scores.extend_from_slice(gamma);
+            }
+            if let Some(slot) = tmpl.continuous_slot {
+                let tracker = &mut self.trackers[slot];
+                for (k, &g) in gamma.iter().enumerate() {
+                    if g > tracker.score[k] {
+                        tracker.score[k] = g;
+                        tracker.best_template[k] = ti;
+                    }
+                }
+            }
+            // Local maxima above the floor, on q against the squared floor. At step k
+            // the candidate is position k - 2; it is a peak when it rose from k - 3 and
+            // does not fall short of k - 1. Positions -1 and -2 are the previous
+            // segment's last two.
+            let floor2 = self.peak_floor * self.peak_floor;
+            let value_at = |k: usize, prev: f32, prev_prev: f32| match k {
+                0 => prev_prev,
+                1 => prev,
+                _ => score2[k - 2],
+            };
+            let mut k = 1;
+            while k <= hop {
+                let candidate = if k == 1 { tmpl.prev } else { score2[k - 2] };
+                if !(candidate > floor2) {
+                    // Skip ahead to the next value above the floor.
+                    match first_above(&score2[k - 1..], floor2) {
+                        Some(off) => {
+                            k += off + 1;
+                            continue;
+                        }
+                        None => break,
+                    }
+                }
+                let before = value_at(k - 1, tmpl.prev, tmpl.prev_prev);
+                let after = score2[k - 1];
+                if candidate > before && candidate >= after {
                     if self.peaks.len() < self.peaks.capacity() {
+                        let t = seg_start + k as u64 - 2;
+                        let window_energy = if k >= 2 {
+                            self.prefix_energy[k - 2 + tmpl.len] - self.prefix_energy[k - 2]
+                        } else {
+                            tmpl.prev_energy
+                        };
                         self.peaks.push(Peak {
                             template: ti,
-                            t: t - 1,
-                            value: tmpl.prev,
-                            window_energy: tmpl.prev_energy,
+                            t,
+                            value: candidate.sqrt(),
+                            window_energy,
                             decided: false,
                         });
                     } else {
                         debug_assert!(false, "peak list full");
                     }
                 }
-                tmpl.prev_prev = tmpl.prev;
-                tmpl.prev = gamma;
-                tmpl.prev_energy = energy;
-                if let Some(slot) = tmpl.continuous_slot {
-                    let tracker = &mut self.trackers[slot];
-                    if gamma > tracker.score[k] {
-                        tracker.score[k] = gamma;
-                        tracker.best_template[k] = ti;
-                    }
-                }
+                k += 1;
             }
+            tmpl.prev_prev = score2[hop - 2];
+            tmpl.prev = score2[hop - 1];
+            tmpl.prev_energy = self.prefix_energy[hop - 1 + tmpl.len] - self.prefix_energy[hop - 1];
         }
         self.computed = seg_start + hop as u64;
         self.peaks
@@ -660,6 +710,50 @@ impl WaveformMatcher {
     }
 }
 
+/// `out[i]` = sum of `x[..i]²` in f64 (`out.len() == x.len() + 1`). The four quarters
+/// of `x` are summed as independent chains in one pass (four times the throughput of a
+/// single dependent chain), then each quarter is offset by the ones before it.
+fn prefix_squares(x: &[f32], out: &mut [f64]) {
+    debug_assert_eq!(out.len(), x.len() + 1);
+    let sq = |v: f32| f64::from(v) * f64::from(v);
+    let q = x.len() / 4;
+    out[0] = 0.0;
+    let (mut a0, mut a1, mut a2, mut a3) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for i in 0..q {
+        a0 += sq(x[i]);
+        a1 += sq(x[q + i]);
+        a2 += sq(x[2 * q + i]);
+        a3 += sq(x[3 * q + i]);
+        out[i + 1] = a0;
+        out[q + i + 1] = a1;
+        out[2 * q + i + 1] = a2;
+        out[3 * q + i + 1] = a3;
+    }
+    for quarter in 1..4 {
+        let offset = out[quarter * q];
+        for v in &mut out[quarter * q + 1..(quarter + 1) * q + 1] {
+            *v += offset;
+        }
+    }
+    // The last len % 4 samples, continuing from the shifted sums.
+    for i in 4 * q..x.len() {
+        out[i + 1] = out[i] + sq(x[i]);
+    }
+}
+
+/// Index of the first value above `floor`. Scans 16 values at a time with a branch-free
+/// maximum (which vectorises): gamma is below the threshold nearly everywhere.
+fn first_above(values: &[f32], floor: f32) -> Option<usize> {
+    let mut base = 0;
+    for chunk in values.chunks(16) {
+        if chunk.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)) > floor {
+            return chunk.iter().position(|&v| v > floor).map(|i| base + i);
+        }
+        base += chunk.len();
+    }
+    None
+}
+
 fn push_closing(tracker: &mut SpanTracker, closing: SpanClosing) {
     if tracker.closing.len() == tracker.closing.capacity() {
         // Far more spans closing at once than any voice makes: keep the newest.
@@ -700,18 +794,63 @@ pub fn direct_ncc(signal: &[f32], pattern: &[f32]) -> Vec<f32> {
     out
 }
 
-/// A dot product written so the compiler vectorises it (8 independent accumulators).
+/// A dot product written so the compiler vectorises it (16 independent accumulators,
+/// no bounds checks in the loop).
 fn dot_product(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let chunks = a.len() / 8;
-    for i in 0..chunks {
-        for lane in 0..8 {
-            acc[lane] += a[i * 8 + lane] * b[i * 8 + lane];
+    let mut acc = [0.0f32; 16];
+    let (a16, b16) = (a.chunks_exact(16), b.chunks_exact(16));
+    let tail: f32 = a16
+        .remainder()
+        .iter()
+        .zip(b16.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a16.zip(b16) {
+        for lane in 0..16 {
+            acc[lane] += x[lane] * y[lane];
         }
     }
-    let mut sum: f32 = acc.iter().sum();
-    for i in chunks * 8..a.len() {
-        sum += a[i] * b[i];
+    acc.iter().sum::<f32>() + tail
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefix_squares_matches_a_sequential_sum() {
+        for len in [0usize, 1, 3, 4, 7, 64, 1027] {
+            let x: Vec<f32> = (0..len)
+                .map(|i| ((i * 37) % 11) as f32 * 0.1 - 0.5)
+                .collect();
+            let mut out = vec![f64::NAN; len + 1];
+            prefix_squares(&x, &mut out);
+            let mut want = 0.0f64;
+            assert_eq!(out[0], 0.0);
+            for i in 0..len {
+                want += f64::from(x[i]) * f64::from(x[i]);
+                assert!(
+                    (out[i + 1] - want).abs() < 1e-9,
+                    "len {len} at {i}: {} vs {want}",
+                    out[i + 1]
+                );
+            }
+        }
     }
-    sum
+
+    #[test]
+    fn first_above_finds_the_first_value_over_the_floor() {
+        let mut v = vec![0.1f32; 100];
+        assert_eq!(first_above(&v, 0.5), None);
+        v[37] = 0.6;
+        v[80] = 0.9;
+        assert_eq!(first_above(&v, 0.5), Some(37));
+        assert_eq!(first_above(&v[38..], 0.5), Some(42));
+        v[3] = f32::NAN;
+        assert_eq!(
+            first_above(&v, 0.5),
+            Some(37),
+            "NaN is never above the floor"
+        );
+    }
 }
