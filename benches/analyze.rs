@@ -1,7 +1,8 @@
 //! `cargo bench --bench analyze`: the waveform detector on a 15 s recording with 3 and 8
 //! patterns, against the paper's computation (direct O(N·M) normalised correlation of
-//! every pattern, `direct_ncc`) on the same signals; and `analyze_file` end to end on a
-//! 44.1 kHz WAV (reading and resampling included).
+//! every pattern, `direct_ncc`) on the same signals; the same comparison for one
+//! pattern of 0.1, 0.3 and 1 s; and `analyze_file` end to end on a 44.1 kHz WAV
+//! (reading and resampling included).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -104,6 +105,32 @@ fn bench_detector(c: &mut Criterion) {
     group.finish();
 }
 
+/// One pattern of growing length: the direct cost grows with the length, the FFT cost
+/// with its logarithm.
+fn bench_length_sweep(c: &mut Criterion) {
+    let settings = DetectorSettings::default();
+    let mut group = c.benchmark_group("length_sweep_15s");
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_millis(100));
+    group.measurement_time(Duration::from_secs(10));
+    for ms in [100u32, 300, 1000] {
+        let take = noise_burst(RATE, f64::from(ms) / 1000.0, f64::from(ms) / 3000.0, 40);
+        let bank = vec![("p".to_string(), take)];
+        let rec = recording(&bank);
+        let pats = patterns(&bank, 1, &settings);
+        group.bench_with_input(BenchmarkId::new("fft_streaming_ms", ms), &ms, |b, _| {
+            b.iter(|| {
+                let mut det = Detector::new(pats.clone(), &settings, RATE).unwrap();
+                black_box(detect_in_blocks(&mut det, black_box(&rec), 1024))
+            })
+        });
+        group.bench_with_input(BenchmarkId::new("direct_ncc_ms", ms), &ms, |b, _| {
+            b.iter(|| black_box(direct_ncc(black_box(&rec), &pats[0].takes[0].samples)))
+        });
+    }
+    group.finish();
+}
+
 fn bench_analyze_file(c: &mut Criterion) {
     let bank = pattern_bank();
     let rec = recording(&bank);
@@ -137,5 +164,5 @@ fn bench_analyze_file(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_detector, bench_analyze_file);
+criterion_group!(benches, bench_detector, bench_length_sweep, bench_analyze_file);
 criterion_main!(benches);
