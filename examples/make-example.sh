@@ -5,8 +5,13 @@
 #   beat.wav                      10 s: the sounds at known times and levels, in light noise
 #   beat.truth.csv                onset_s,label,end_s,gain of every sound placed in beat.wav
 # Needs: espeak-ng, sox (apt-get install espeak-ng sox).
+# Usage: examples/make-example.sh [OUTPUT_DIR]   (default: the folder of this script)
 set -euo pipefail
-cd "$(dirname "$0")"
+# Repeatable noise, no dither: the same tools give the same bytes on every run.
+export SOX_OPTS="-R -D"
+out=${1:-$(dirname "$0")}
+mkdir -p "$out"
+cd "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 rate=22050
@@ -48,7 +53,7 @@ while read -r start label gain; do
   sox -v "$gain" "$src" "$tmp/part$i.wav" pad "$start"
   len=$(soxi -D "$src")
   if [ "$label" = hoo ]; then
-    printf '%s,%s,%.4f,%s\n' "$start" "$label" "$(echo "$start + $len" | bc -l)" "$gain" >> beat.truth.csv
+    printf '%s,%s,%s,%s\n' "$start" "$label" "$(awk "BEGIN { printf \"%.4f\", $start + $len }")" "$gain" >> beat.truth.csv
   else
     printf '%s,%s,,%s\n' "$start" "$label" "$gain" >> beat.truth.csv
   fi

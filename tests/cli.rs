@@ -34,9 +34,9 @@ struct Truth {
     gain: f64,
 }
 
-/// examples/beat.truth.csv, written by examples/make-example.sh from its timeline.
-fn truth() -> Vec<Truth> {
-    let text = std::fs::read_to_string(root().join("examples/beat.truth.csv")).unwrap();
+/// A truth CSV written by examples/make-example.sh from its timeline.
+fn truth_in(dir: &Path) -> Vec<Truth> {
+    let text = std::fs::read_to_string(dir.join("beat.truth.csv")).unwrap();
     text.lines()
         .skip(1)
         .map(|line| {
@@ -51,26 +51,21 @@ fn truth() -> Vec<Truth> {
         .collect()
 }
 
+fn truth() -> Vec<Truth> {
+    truth_in(&root().join("examples"))
+}
+
 fn analyze_example(extra: &[&str]) -> Value {
-    let mut args = vec![
-        "analyze",
-        "examples/beat.wav",
-        "--config",
-        "config/onomato.toml",
-    ];
+    let mut args = vec!["analyze", "examples/beat.wav", "--config", "config/onomato.toml"];
     args.extend_from_slice(extra);
     let out = onomato(&args);
     assert!(out.status.success(), "stderr: {}", stderr(&out));
     serde_json::from_str(&stdout(&out)).expect("stdout is one JSON document")
 }
 
-#[test]
-fn analyze_prints_only_the_events_object_and_finds_the_example() {
-    let json = analyze_example(&[]);
-    let obj = json.as_object().unwrap();
-    assert_eq!(obj.keys().collect::<Vec<_>>(), ["events"]);
+/// Every placed sound is found once, with its label, onset and level.
+fn assert_matches_truth(json: &Value, truth: &[Truth]) {
     let events = json["events"].as_array().unwrap();
-    let truth = truth();
     assert_eq!(events.len(), truth.len(), "{json:#}");
     for (i, e) in events.iter().enumerate() {
         assert_eq!(e["id"].as_u64(), Some(i as u64), "ids count up in order");
@@ -87,31 +82,60 @@ fn analyze_prints_only_the_events_object_and_finds_the_example() {
                 assert_eq!(e["kind"], "impulse");
                 assert!(e.get("end").is_none(), "impulses have no end: {e}");
                 assert!((time - t.onset).abs() <= 0.002, "{e} vs {}", t.onset);
-                assert!(
-                    (strength - t.gain).abs() / t.gain < 0.03,
-                    "{e} vs gain {}",
-                    t.gain
-                );
+                assert!((strength - t.gain).abs() / t.gain < 0.03, "{e} vs gain {}", t.gain);
             }
             Some(end) => {
                 assert_eq!(e["kind"], "continuous");
                 // The held sound opens with an unvoiced "h", which cannot correlate
                 // with the voiced pattern: the span starts where the vowel does.
-                assert!(
-                    time >= t.onset && time - t.onset <= 0.1,
-                    "{e} vs {}",
-                    t.onset
-                );
+                assert!(time >= t.onset && time - t.onset <= 0.1, "{e} vs {}", t.onset);
                 let got_end = e["end"].as_f64().unwrap();
                 assert!((got_end - end).abs() <= 0.02, "{e} vs end {end}");
-                assert!(
-                    (strength - t.gain).abs() / t.gain < 0.1,
-                    "{e} vs gain {}",
-                    t.gain
-                );
+                assert!((strength - t.gain).abs() / t.gain < 0.1, "{e} vs gain {}", t.gain);
             }
         }
     }
+}
+
+#[test]
+fn analyze_prints_only_the_events_object_and_finds_the_example() {
+    let json = analyze_example(&[]);
+    let obj = json.as_object().unwrap();
+    assert_eq!(obj.keys().collect::<Vec<_>>(), ["events"]);
+    assert_matches_truth(&json, &truth());
+}
+
+/// The bundled example is made by examples/make-example.sh (espeak-ng and sox, which
+/// the test script installs): rebuilt from scratch, it must still be found exactly.
+#[test]
+fn the_example_script_rebuilds_an_example_that_is_found() {
+    for tool in ["espeak-ng", "sox"] {
+        let found = Command::new(tool).arg("--version").output().is_ok();
+        assert!(found, "{tool} is needed to rebuild the example: run scripts/test.sh, which installs it");
+    }
+    let dir = std::env::temp_dir().join(format!("onomato-example-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let script = root().join("examples/make-example.sh");
+    let made = Command::new("bash").arg(&script).arg(&dir).output().unwrap();
+    assert!(made.status.success(), "{}", stderr(&made));
+    let pattern = |name: &str, suffix: &str| {
+        format!("{name}={}{suffix}", dir.join(format!("patterns/{name}.wav")).display())
+    };
+    let args = [
+        pattern("tick", ""),
+        pattern("pop", ""),
+        pattern("boom", ""),
+        pattern("hoo", ":continuous"),
+    ];
+    let rec = dir.join("beat.wav");
+    let mut argv = vec!["analyze", rec.to_str().unwrap()];
+    for a in &args {
+        argv.extend(["--pattern", a.as_str()]);
+    }
+    let out = onomato(&argv);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_matches_truth(&json, &truth_in(&dir));
 }
 
 #[test]
