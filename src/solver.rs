@@ -13,7 +13,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::config::{BounceSettings, ContactStyle};
-use crate::detect::Event;
+use crate::detect::{opt_seconds, ratio, seconds, Event};
 
 /// One floor contact and the flight that follows it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -23,20 +23,29 @@ pub struct Contact {
     pub pattern: Arc<str>,
     pub style: ContactStyle,
     /// Contact begins (the hit, or the slide's begin), seconds.
+    #[serde(serialize_with = "seconds")]
     pub time: f64,
     /// Contact ends and the ball launches (equal to `time` for hits).
+    #[serde(serialize_with = "seconds")]
     pub end: f64,
+    #[serde(serialize_with = "ratio")]
     pub strength: f64,
     /// Squash of a soft bounce, as a fraction of the ball's height (0 otherwise).
+    #[serde(serialize_with = "ratio")]
     pub squash: f64,
     /// Vertical launch speed at `end`, m/s (0 after the last contact).
+    #[serde(serialize_with = "ratio")]
     pub launch_velocity: f64,
     /// Time in the air until the next contact, s (0 after the last contact).
+    #[serde(serialize_with = "seconds")]
     pub flight_time: f64,
     /// Highest point of the flight above the floor, m.
+    #[serde(serialize_with = "ratio")]
     pub apex_height: f64,
+    #[serde(serialize_with = "opt_seconds")]
     pub apex_time: Option<f64>,
     /// When the ball touches the floor again: the next contact's time.
+    #[serde(serialize_with = "opt_seconds")]
     pub landing_time: Option<f64>,
 }
 
