@@ -1,0 +1,114 @@
+//! The detector's per-block work allocates nothing: it will run on the daemon's
+//! detector thread, fed from the audio ring. A counting global allocator watches the
+//! test's own thread while blocks go through `Detector::process`, with impulses,
+//! continuous spans and the resampler all at work.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use common::*;
+use onomato::config::DetectorSettings;
+use onomato::{Detector, Event};
+
+struct CountingAllocator;
+
+thread_local! {
+    // const-initialised, no destructor: reading it never allocates.
+    static WATCHING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if WATCHING.with(Cell::get) {
+            ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if WATCHING.with(Cell::get) {
+            ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        }
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: CountingAllocator = CountingAllocator;
+
+/// Allocations made by `f` on this thread.
+fn allocations_in(f: impl FnOnce()) -> usize {
+    ALLOCATIONS.with(|n| n.set(0));
+    WATCHING.with(|w| w.set(true));
+    f();
+    WATCHING.with(|w| w.set(false));
+    ALLOCATIONS.with(Cell::get)
+}
+
+fn scene() -> Vec<f32> {
+    let mut rec = vec![0.0f32; samples_for(12.0, RATE)];
+    let mut at = samples_for(0.3, RATE);
+    let mut k = 0;
+    for (_, p) in three_impulses().iter().cycle().take(18) {
+        place(&mut rec, p, at, 0.8);
+        at += samples_for(0.45, RATE);
+        k += 1;
+    }
+    assert_eq!(k, 18);
+    place(&mut rec, &buzz(RATE, 1.2, 140.0), samples_for(9.5, RATE), 0.6);
+    add_noise(&mut rec, 0.002, 2);
+    rec
+}
+
+fn check(input_rate: u32, block: usize) {
+    let settings = DetectorSettings::default();
+    let mut patterns: Vec<_> = three_impulses()
+        .into_iter()
+        .map(|(n, s)| impulse(n, s, &settings))
+        .collect();
+    patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
+    let rec = onomato::audio::resample_clip(&scene(), RATE, input_rate).unwrap();
+    let mut det = Detector::new(patterns, &settings, input_rate).unwrap();
+    let mut events: Vec<Event> = Vec::with_capacity(256);
+    // The first second warms up nothing in particular; it is here so that any lazy
+    // one-time set-up (were there one) is not mistaken for per-block work.
+    let warm = input_rate as usize;
+    for chunk in rec[..warm].chunks(block) {
+        det.process(chunk, &mut events);
+    }
+    let n = allocations_in(|| {
+        for chunk in rec[warm..].chunks(block) {
+            det.process(chunk, &mut events);
+        }
+    });
+    assert_eq!(n, 0, "{n} allocations while processing at {input_rate} Hz, blocks of {block}");
+    det.finish(&mut events);
+    let impulses = events.iter().filter(|e| e.end.is_none()).count();
+    let held = events.iter().filter(|e| e.end.is_some()).count();
+    assert_eq!((impulses, held), (18, 1), "the run detected what it should: {events:#?}");
+}
+
+#[test]
+fn processing_blocks_allocates_nothing_at_the_working_rate() {
+    check(RATE, 256);
+}
+
+#[test]
+fn processing_blocks_allocates_nothing_through_the_resampler() {
+    check(48_000, 480);
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    // Guards the guard: an allocation on this thread is counted.
+    let n = allocations_in(|| {
+        let v: Vec<u64> = Vec::with_capacity(std::hint::black_box(32));
+        std::hint::black_box(v);
+    });
+    assert_eq!(n, 1);
+}
