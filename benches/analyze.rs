@@ -164,5 +164,10 @@ fn bench_analyze_file(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_detector, bench_length_sweep, bench_analyze_file);
+criterion_group!(
+    benches,
+    bench_detector,
+    bench_length_sweep,
+    bench_analyze_file
+);
 criterion_main!(benches);

@@ -56,7 +56,12 @@ fn truth() -> Vec<Truth> {
 }
 
 fn analyze_example(extra: &[&str]) -> Value {
-    let mut args = vec!["analyze", "examples/beat.wav", "--config", "config/onomato.toml"];
+    let mut args = vec![
+        "analyze",
+        "examples/beat.wav",
+        "--config",
+        "config/onomato.toml",
+    ];
     args.extend_from_slice(extra);
     let out = onomato(&args);
     assert!(out.status.success(), "stderr: {}", stderr(&out));
@@ -82,16 +87,28 @@ fn assert_matches_truth(json: &Value, truth: &[Truth]) {
                 assert_eq!(e["kind"], "impulse");
                 assert!(e.get("end").is_none(), "impulses have no end: {e}");
                 assert!((time - t.onset).abs() <= 0.002, "{e} vs {}", t.onset);
-                assert!((strength - t.gain).abs() / t.gain < 0.03, "{e} vs gain {}", t.gain);
+                assert!(
+                    (strength - t.gain).abs() / t.gain < 0.03,
+                    "{e} vs gain {}",
+                    t.gain
+                );
             }
             Some(end) => {
                 assert_eq!(e["kind"], "continuous");
                 // The held sound opens with an unvoiced "h", which cannot correlate
                 // with the voiced pattern: the span starts where the vowel does.
-                assert!(time >= t.onset && time - t.onset <= 0.1, "{e} vs {}", t.onset);
+                assert!(
+                    time >= t.onset && time - t.onset <= 0.1,
+                    "{e} vs {}",
+                    t.onset
+                );
                 let got_end = e["end"].as_f64().unwrap();
                 assert!((got_end - end).abs() <= 0.02, "{e} vs end {end}");
-                assert!((strength - t.gain).abs() / t.gain < 0.1, "{e} vs gain {}", t.gain);
+                assert!(
+                    (strength - t.gain).abs() / t.gain < 0.1,
+                    "{e} vs gain {}",
+                    t.gain
+                );
             }
         }
     }
@@ -111,15 +128,25 @@ fn analyze_prints_only_the_events_object_and_finds_the_example() {
 fn the_example_script_rebuilds_an_example_that_is_found() {
     for tool in ["espeak-ng", "sox"] {
         let found = Command::new(tool).arg("--version").output().is_ok();
-        assert!(found, "{tool} is needed to rebuild the example: run scripts/test.sh, which installs it");
+        assert!(
+            found,
+            "{tool} is needed to rebuild the example: run scripts/test.sh, which installs it"
+        );
     }
     let dir = std::env::temp_dir().join(format!("onomato-example-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let script = root().join("examples/make-example.sh");
-    let made = Command::new("bash").arg(&script).arg(&dir).output().unwrap();
+    let made = Command::new("bash")
+        .arg(&script)
+        .arg(&dir)
+        .output()
+        .unwrap();
     assert!(made.status.success(), "{}", stderr(&made));
     let pattern = |name: &str, suffix: &str| {
-        format!("{name}={}{suffix}", dir.join(format!("patterns/{name}.wav")).display())
+        format!(
+            "{name}={}{suffix}",
+            dir.join(format!("patterns/{name}.wav")).display()
+        )
     };
     let args = [
         pattern("tick", ""),

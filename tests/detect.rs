@@ -16,8 +16,10 @@ struct Placed {
     gain: f32,
 }
 
+type NamedSound = (&'static str, Vec<f32>);
+
 /// A 12 s recording: the three impulse patterns at known places and gains in noise.
-fn known_recording(rate_noise_rms: f64) -> (Vec<f32>, Vec<Placed>, Vec<(&'static str, Vec<f32>)>) {
+fn known_recording(rate_noise_rms: f64) -> (Vec<f32>, Vec<Placed>, Vec<NamedSound>) {
     let pats = three_impulses();
     let mut rng = Rng::new(7);
     let mut rec = vec![0.0f32; samples_for(12.0, RATE)];
@@ -40,7 +42,7 @@ fn known_recording(rate_noise_rms: f64) -> (Vec<f32>, Vec<Placed>, Vec<(&'static
     (rec, placed, pats)
 }
 
-fn build(pats: &[(&'static str, Vec<f32>)], settings: &DetectorSettings) -> Vec<Pattern> {
+fn build(pats: &[NamedSound], settings: &DetectorSettings) -> Vec<Pattern> {
     pats.iter()
         .map(|(n, s)| impulse(n, s.clone(), settings))
         .collect()

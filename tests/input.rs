@@ -207,7 +207,7 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     );
 
     let mut click = vec![0.0f32; 2000];
-    click[1000..1060].copy_from_slice(&noise_burst(RATE, 0.0028, 1.0, 6)[..60].to_vec());
+    click[1000..1060].copy_from_slice(&noise_burst(RATE, 0.0028, 1.0, 6)[..60]);
     write_wav_f32(&dir.join("click.wav"), &click, RATE);
     let msg = load_error(&dir, "click.wav", &settings);
     assert!(

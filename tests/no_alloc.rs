@@ -60,7 +60,12 @@ fn scene() -> Vec<f32> {
         k += 1;
     }
     assert_eq!(k, 18);
-    place(&mut rec, &buzz(RATE, 1.2, 140.0), samples_for(9.5, RATE), 0.6);
+    place(
+        &mut rec,
+        &buzz(RATE, 1.2, 140.0),
+        samples_for(9.5, RATE),
+        0.6,
+    );
     add_noise(&mut rec, 0.002, 2);
     rec
 }
@@ -86,11 +91,18 @@ fn check(input_rate: u32, block: usize) {
             det.process(chunk, &mut events);
         }
     });
-    assert_eq!(n, 0, "{n} allocations while processing at {input_rate} Hz, blocks of {block}");
+    assert_eq!(
+        n, 0,
+        "{n} allocations while processing at {input_rate} Hz, blocks of {block}"
+    );
     det.finish(&mut events);
     let impulses = events.iter().filter(|e| e.end.is_none()).count();
     let held = events.iter().filter(|e| e.end.is_some()).count();
-    assert_eq!((impulses, held), (18, 1), "the run detected what it should: {events:#?}");
+    assert_eq!(
+        (impulses, held),
+        (18, 1),
+        "the run detected what it should: {events:#?}"
+    );
 }
 
 #[test]

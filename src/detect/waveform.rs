@@ -85,7 +85,6 @@ struct PatternInfo {
 
 #[derive(Clone, Copy)]
 struct SpanOpen {
-    start: u64,
     begin_sample: u64,
     begin_cum: f64,
     best_score: f32,
@@ -343,7 +342,6 @@ impl WaveformMatcher {
         }
         let end = self.consumed;
         self.emit_limit = end;
-        let first = out.len();
         // Impulses need gamma up to their suppression window (+2 to confirm the last
         // local maximum); continuous spans also need the smoothing delay and the frames
         // searched for their end.
@@ -380,7 +378,6 @@ impl WaveformMatcher {
             }
             e.time < end_s
         });
-        debug_assert!(out.len() >= first);
         if let Some(traces) = &mut self.trace {
             for t in traces {
                 t.scores.truncate(end as usize);
@@ -471,7 +468,8 @@ impl WaveformMatcher {
             let mut k = 1;
             while k <= hop {
                 let candidate = if k == 1 { tmpl.prev } else { score2[k - 2] };
-                if !(candidate > floor2) {
+                // NaN counts as below the floor.
+                if candidate.partial_cmp(&floor2) != Some(std::cmp::Ordering::Greater) {
                     // Skip ahead to the next value above the floor.
                     match first_above(&score2[k - 1..], floor2) {
                         Some(off) => {
@@ -600,7 +598,6 @@ impl WaveformMatcher {
                         .boundary(begin_sample / self.frames.frame_len() as u64)
                         .unwrap_or(0.0);
                     self.trackers[slot].open = Some(SpanOpen {
-                        start: c,
                         begin_sample,
                         begin_cum,
                         best_score: raw_c,
@@ -608,12 +605,11 @@ impl WaveformMatcher {
                     });
                 }
                 None => {}
-                Some(open) if smooth >= tracker.low => {
-                    if raw_c > open.best_score {
-                        open.best_score = raw_c;
-                        open.best_template = template_c;
-                    }
+                Some(open) if smooth >= tracker.low && raw_c > open.best_score => {
+                    open.best_score = raw_c;
+                    open.best_template = template_c;
                 }
+                Some(_) if smooth >= tracker.low => {}
                 Some(_) => {
                     if let Some(open) = tracker.open.take() {
                         push_closing(
@@ -695,7 +691,6 @@ impl WaveformMatcher {
             let tmpl = &self.templates[open.best_template];
             let span_power = span_energy / (end_sample - open.begin_sample) as f64;
             let pattern_power = tmpl.energy / tmpl.len as f64;
-            let _ = open.start;
             out.push(Event {
                 id: 0,
                 pattern: self.patterns[pattern].name.clone(),
