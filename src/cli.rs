@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::analyze;
 use crate::config::{self, Config, Method};
+use crate::eval;
 use crate::pattern;
 
 /// Turns short vocal sounds ("tick", "pop", "chhh") into timed events for animation and
@@ -33,6 +34,8 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Validate a configuration and load its pattern files; exit 1 if anything is wrong.
     Check(PatternSource),
+    /// Analyse a recording and score the events against an annotation CSV.
+    Eval(EvalArgs),
 }
 
 /// Where the patterns come from: a config file, `--pattern` arguments, or both.
@@ -80,6 +83,29 @@ pub struct AnalyzeArgs {
     /// Gravity for --bounce, m/s² (overrides the config).
     #[arg(long)]
     pub gravity: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ScoreFormat {
+    Text,
+    Json,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// The recording to analyse (WAV).
+    pub recording: PathBuf,
+    /// Annotation CSV with a header: onset_s,label[,end_s] (other columns are ignored).
+    #[arg(long, value_name = "CSV")]
+    pub truth: PathBuf,
+    #[command(flatten)]
+    pub source: PatternSource,
+    /// A detection is correct when its label matches and its onset is this close, seconds.
+    #[arg(long, default_value_t = 0.05)]
+    pub tolerance: f64,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = ScoreFormat::Text)]
+    pub format: ScoreFormat,
 }
 
 impl PatternSource {
@@ -139,6 +165,28 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     .context("cannot write to stdout")
 }
 
+fn run_eval(args: &EvalArgs) -> anyhow::Result<()> {
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        anyhow::bail!(
+            "--tolerance must be a positive number of seconds, found {}",
+            args.tolerance
+        );
+    }
+    let truth = eval::load_truth(&args.truth)?;
+    let config = args.source.to_config()?;
+    let analysis = analyze::analyze_file(&args.recording, &config)?;
+    let score = eval::score(&analysis.events, &truth, args.tolerance);
+    let text = match args.format {
+        ScoreFormat::Text => eval::render_text(&score),
+        ScoreFormat::Json => serde_json::to_string(&score)? + "\n",
+    };
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .context("cannot write to stdout")
+}
+
 fn run_check(source: &PatternSource) -> anyhow::Result<()> {
     let config = source.to_config()?;
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
@@ -179,6 +227,7 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Analyze(args) => run_analyze(args),
         Command::Check(source) => run_check(source),
+        Command::Eval(args) => run_eval(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,13 +5,14 @@
 //! ([`cli`]). Modules, by concern: [`config`] (TOML and command-line settings),
 //! [`audio`] (WAV in, resampling), [`pattern`] (enrolled takes), [`detect`] (the one
 //! streaming detection core), [`solver`] (the bounce solver), [`analyze`] (the offline
-//! command and its output formats).
+//! command and its output formats), [`eval`] (scoring against an annotation).
 
 pub mod analyze;
 pub mod audio;
 pub mod cli;
 pub mod config;
 pub mod detect;
+pub mod eval;
 pub mod pattern;
 pub mod solver;
 
