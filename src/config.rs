@@ -52,7 +52,7 @@ pub enum Method {
     /// The paper's normalised cross-correlation of raw waveforms.
     #[default]
     Waveform,
-    /// A feature-domain matcher (not available yet).
+    /// Log-mel frames matched a few tens of milliseconds after each onset.
     Spectral,
 }
 
@@ -87,6 +87,7 @@ struct RawDetector {
     suppression_seconds: Option<f64>,
     max_pattern_seconds: Option<f64>,
     channel: Option<u16>,
+    decision_seconds: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -130,6 +131,8 @@ pub struct DetectorSettings {
     pub suppression_seconds: Option<f64>,
     /// Longest pattern take accepted.
     pub max_pattern_seconds: f64,
+    /// Spectral method: how long after an onset the sound is classified.
+    pub decision_seconds: f64,
     /// Channel of multi-channel inputs (`None`: mix all channels). Mono files are used
     /// as they are.
     pub channel: Option<u16>,
@@ -145,6 +148,7 @@ impl Default for DetectorSettings {
             suppression_seconds: None,
             max_pattern_seconds: 5.0,
             channel: None,
+            decision_seconds: 0.025,
         }
     }
 }
@@ -319,6 +323,7 @@ impl RawConfig {
                 .max_pattern_seconds
                 .unwrap_or(defaults.max_pattern_seconds),
             channel: d.channel,
+            decision_seconds: d.decision_seconds.unwrap_or(defaults.decision_seconds),
         };
         detector.validate(origin)?;
 
@@ -419,6 +424,13 @@ impl DetectorSettings {
                     format!("suppression_seconds must be between 0 and 5, found {s}"),
                 ));
             }
+        }
+        let d = self.decision_seconds;
+        if !(d.is_finite() && (0.015..=0.2).contains(&d)) {
+            return Err(invalid(
+                &item,
+                format!("decision_seconds must be between 0.015 and 0.2, found {d}"),
+            ));
         }
         let m = self.max_pattern_seconds;
         if !(m.is_finite() && (0.05..=60.0).contains(&m)) {

@@ -285,17 +285,6 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
                 "examples/beat.wav",
                 "-c",
                 "config/onomato.toml",
-                "--method",
-                "spectral",
-            ],
-            "the spectral method is not available yet; use --method waveform",
-        ),
-        (
-            &[
-                "analyze",
-                "examples/beat.wav",
-                "-c",
-                "config/onomato.toml",
                 "--bounce",
                 "--format",
                 "csv",
@@ -344,6 +333,32 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
         assert!(stdout(&out).is_empty(), "{args:?} printed on stdout");
         assert!(!stderr(&out).contains("panicked"), "{args:?}");
     }
+}
+
+#[test]
+fn both_methods_run_and_an_unknown_method_is_a_usage_error() {
+    for method in ["waveform", "spectral"] {
+        let json = analyze_example(&["--method", method]);
+        assert!(
+            !json["events"].as_array().unwrap().is_empty(),
+            "{method}: {json}"
+        );
+    }
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--method",
+        "fourier",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "clap's usage-error code");
+    assert!(
+        stderr(&out).contains("invalid value 'fourier' for '--method <METHOD>'"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(stderr(&out).contains("[possible values: waveform, spectral]"));
 }
 
 #[test]

@@ -9,7 +9,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use common::*;
-use onomato::config::DetectorSettings;
+use onomato::config::{DetectorSettings, Method};
 use onomato::{Detector, Event};
 
 struct CountingAllocator;
@@ -70,8 +70,11 @@ fn scene() -> Vec<f32> {
     rec
 }
 
-fn check(input_rate: u32, block: usize) {
-    let settings = DetectorSettings::default();
+fn check(method: Method, input_rate: u32, block: usize) {
+    let settings = DetectorSettings {
+        method,
+        ..DetectorSettings::default()
+    };
     let mut patterns: Vec<_> = three_impulses()
         .into_iter()
         .map(|(n, s)| impulse(n, s, &settings))
@@ -107,12 +110,14 @@ fn check(input_rate: u32, block: usize) {
 
 #[test]
 fn processing_blocks_allocates_nothing_at_the_working_rate() {
-    check(RATE, 256);
+    check(Method::Waveform, RATE, 256);
+    check(Method::Spectral, RATE, 256);
 }
 
 #[test]
 fn processing_blocks_allocates_nothing_through_the_resampler() {
-    check(48_000, 480);
+    check(Method::Waveform, 48_000, 480);
+    check(Method::Spectral, 48_000, 480);
 }
 
 #[test]

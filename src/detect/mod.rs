@@ -9,6 +9,7 @@
 //! [`Detector::process`] allocates nothing, provided the caller's event vector has room.
 
 mod envelope;
+pub mod spectral;
 pub mod waveform;
 
 use std::sync::Arc;
@@ -18,7 +19,30 @@ use serde::{Serialize, Serializer};
 use crate::audio::{AudioError, StreamResampler};
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
+pub use spectral::SpectralMatcher;
 pub use waveform::WaveformMatcher;
+
+/// The matcher a detector runs.
+enum Matcher {
+    Waveform(WaveformMatcher),
+    Spectral(SpectralMatcher),
+}
+
+impl Matcher {
+    fn push(&mut self, samples: &[f32], out: &mut Vec<Event>) {
+        match self {
+            Matcher::Waveform(m) => m.push(samples, out),
+            Matcher::Spectral(m) => m.push(samples, out),
+        }
+    }
+
+    fn finish(&mut self, out: &mut Vec<Event>) {
+        match self {
+            Matcher::Waveform(m) => m.finish(out),
+            Matcher::Spectral(m) => m.finish(out),
+        }
+    }
+}
 
 /// One detected instance of a pattern. The same record is printed by `analyze`, sent by
 /// the daemon and read by tools. Times are seconds from the start of the stream.
@@ -73,8 +97,6 @@ pub(crate) fn ratio<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
 pub enum DetectError {
     #[error("no patterns are configured: give --pattern NAME=FILE.wav or a config with [[pattern]] entries")]
     NoPatterns,
-    #[error("the spectral method is not available yet; use --method waveform")]
-    SpectralUnavailable,
     #[error("input sample rate {0} Hz is not usable; expected 1000 to 768000 Hz")]
     InputRate(u32),
     #[error(transparent)]
@@ -85,7 +107,7 @@ pub enum DetectError {
 pub struct Detector {
     input_rate: u32,
     resampler: Option<StreamResampler>,
-    matcher: WaveformMatcher,
+    matcher: Matcher,
     next_id: u64,
     input_consumed: u64,
 }
@@ -105,8 +127,8 @@ impl Detector {
             return Err(DetectError::InputRate(input_rate));
         }
         let matcher = match settings.method {
-            Method::Waveform => WaveformMatcher::new(patterns, settings),
-            Method::Spectral => return Err(DetectError::SpectralUnavailable),
+            Method::Waveform => Matcher::Waveform(WaveformMatcher::new(patterns, settings)),
+            Method::Spectral => Matcher::Spectral(SpectralMatcher::new(patterns, settings)),
         };
         let resampler = if input_rate == settings.sample_rate {
             None
@@ -134,13 +156,19 @@ impl Detector {
 
     /// Keeps every match-score value (per pattern take) from now on, for plots and tests.
     /// Grows with the stream: for offline use only.
+    /// (Waveform method only.)
     pub fn enable_score_trace(&mut self) {
-        self.matcher.enable_score_trace();
+        if let Matcher::Waveform(m) = &mut self.matcher {
+            m.enable_score_trace();
+        }
     }
 
     /// The recorded match scores: one curve per take, at the working rate.
     pub fn score_trace(&self) -> Option<&[waveform::TakeTrace]> {
-        self.matcher.score_trace()
+        match &self.matcher {
+            Matcher::Waveform(m) => m.score_trace(),
+            Matcher::Spectral(_) => None,
+        }
     }
 
     /// Consumes one block of mono input and appends the events decided meanwhile.

@@ -1,0 +1,227 @@
+//! Accuracy and latency on real human vocal percussion, for both methods.
+//!
+//!     cargo run --release --example eval_beatbox -- BEATBOX_DIR [--method waveform|spectral]
+//!
+//! BEATBOX_DIR holds isolated/{b,c,ts}/*.wav (single hits), beats/*.wav with their
+//! annotation CSVs, and repeated/*.wav (see the recordings' own README). The sets:
+//! - isolated: take 01 of each class is enrolled; the other takes are laid out with
+//!   gaps of 30-700 ms (and, in the "tight" set, 30-120 ms), gains of -9..0 dB and low
+//!   noise. The truth onset of a take is its first 1 ms block within 20 dB of its
+//!   loudest.
+//! - beats: one instance of each label is enrolled from rec2 (cut around its annotated
+//!   onset) and detected on rec3 and rec4; rec6's labels that rec2 lacks are enrolled
+//!   from rec6's first instance, and rec6 is detected whole.
+//!
+//! Scores: `onomato::eval` (label and onset within 50 ms, one to one).
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::Rng;
+use onomato::analyze::detect_in_blocks;
+use onomato::audio::{resample_clip, ChannelSelect, WavSource};
+use onomato::config::{DetectorSettings, Method, PatternKind};
+use onomato::eval::{load_truth, score, Annotation, Score};
+use onomato::{Detector, Pattern};
+
+const RATE: u32 = 22_050;
+
+fn read(path: &Path) -> Vec<f32> {
+    let mut src = WavSource::open(path, ChannelSelect::Mix).unwrap_or_else(|e| panic!("{e}"));
+    let rate = src.sample_rate();
+    let samples = src.read_all().unwrap_or_else(|e| panic!("{e}"));
+    resample_clip(&samples, rate, RATE).unwrap()
+}
+
+/// First 1 ms block within 20 dB of the loudest block.
+fn energy_onset(x: &[f32]) -> usize {
+    let block = (RATE / 1000) as usize;
+    let energies: Vec<f32> = x
+        .chunks(block)
+        .map(|c| c.iter().map(|v| v * v).sum())
+        .collect();
+    let loudest = energies.iter().cloned().fold(0.0, f32::max);
+    energies
+        .iter()
+        .position(|&e| e >= loudest / 100.0)
+        .unwrap_or(0)
+        * block
+}
+
+fn pattern(name: &str, take: Vec<f32>, settings: &DetectorSettings) -> Pattern {
+    Pattern::from_samples(name, PatternKind::Impulse, vec![take], settings)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run(
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+    rec: &[f32],
+    truth: &[Annotation],
+) -> Score {
+    let mut det = Detector::new(patterns.to_vec(), settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, rec, 256);
+    score(&events, truth, 0.05)
+}
+
+fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64) -> Score {
+    let classes = ["b", "c", "ts"];
+    let mut patterns = Vec::new();
+    let mut others: Vec<(&str, Vec<f32>)> = Vec::new();
+    for class in classes {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir.join("isolated").join(class))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        patterns.push(pattern(class, read(&files[0]), settings));
+        for f in &files[1..] {
+            others.push((class, read(f)));
+        }
+    }
+    let mut rng = Rng::new(seed);
+    let mut rec = vec![0.0f32; RATE as usize / 2];
+    let mut truth = Vec::new();
+    for _round in 0..3 {
+        let mut order: Vec<usize> = (0..others.len()).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        }
+        for &i in &order {
+            let (class, take) = &others[i];
+            let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
+            let at = rec.len();
+            truth.push(Annotation {
+                onset: (at + energy_onset(take)) as f64 / f64::from(RATE),
+                label: class.to_string(),
+                end: None,
+            });
+            rec.extend(take.iter().map(|x| x * gain));
+            let gap = rng.range(gaps.0, gaps.1);
+            rec.extend(std::iter::repeat_n(0.0, (gap * f64::from(RATE)) as usize));
+        }
+    }
+    common::add_noise(&mut rec, 0.001, seed + 1);
+    run(&patterns, settings, &rec, &truth)
+}
+
+fn label_name(label: &str) -> String {
+    label
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric())
+        .collect()
+}
+
+/// The first instance of `label` in `rec`, cut from 20 ms before its onset to the next
+/// onset (at most 300 ms).
+fn cut_first(rec: &[f32], truth: &[Annotation], label: &str) -> Option<Vec<f32>> {
+    let i = truth.iter().position(|t| t.label == label)?;
+    let start = ((truth[i].onset - 0.02).max(0.0) * f64::from(RATE)) as usize;
+    let next = truth
+        .get(i + 1)
+        .map_or(truth[i].onset + 0.3, |t| t.onset - 0.01);
+    let end = ((next.min(truth[i].onset + 0.3)) * f64::from(RATE)) as usize;
+    Some(rec[start..end.min(rec.len())].to_vec())
+}
+
+fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
+    let beats = dir.join("beats");
+    let load = |name: &str| {
+        let rec = read(&beats.join(format!("{name}.wav")));
+        let mut truth = load_truth(&beats.join(format!("{name}.csv"))).unwrap();
+        for t in &mut truth {
+            t.label = label_name(&t.label);
+        }
+        (rec, truth)
+    };
+    let (rec2, truth2) = load("rsalazar_rec2");
+    let mut labels2: Vec<String> = truth2.iter().map(|t| t.label.clone()).collect();
+    labels2.sort();
+    labels2.dedup();
+    let enrol2: Vec<Pattern> = labels2
+        .iter()
+        .filter_map(|l| Some(pattern(l, cut_first(&rec2, &truth2, l)?, settings)))
+        .collect();
+    let mut out = Vec::new();
+    for name in ["rsalazar_rec3", "rsalazar_rec4"] {
+        let (rec, truth) = load(name);
+        out.push((name.to_string(), run(&enrol2, settings, &rec, &truth)));
+    }
+    let (rec6, truth6) = load("rsalazar_rec6");
+    let mut enrol6 = enrol2.clone();
+    let mut labels6: Vec<String> = truth6.iter().map(|t| t.label.clone()).collect();
+    labels6.sort();
+    labels6.dedup();
+    for l in labels6.iter().filter(|l| !labels2.contains(l)) {
+        if let Some(take) = cut_first(&rec6, &truth6, l) {
+            enrol6.push(pattern(l, take, settings));
+        }
+    }
+    out.push((
+        "rsalazar_rec6".to_string(),
+        run(&enrol6, settings, &rec6, &truth6),
+    ));
+    out
+}
+
+fn row(set: &str, method: Method, s: &Score) {
+    let ms = |x: Option<f64>| x.map_or("-".into(), |v| format!("{:.0}", v * 1000.0));
+    println!(
+        "| {set} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |",
+        match method {
+            Method::Waveform => "waveform",
+            Method::Spectral => "spectral",
+        },
+        s.overall.f1,
+        s.overall.precision,
+        s.overall.recall,
+        s.onsets.f1,
+        ms(s.latency_median),
+        ms(s.latency_p95),
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(dir) = args.first().map(PathBuf::from) else {
+        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--verbose]");
+        std::process::exit(2);
+    };
+    let methods = match args
+        .iter()
+        .position(|a| a == "--method")
+        .and_then(|i| args.get(i + 1))
+    {
+        Some(m) if m == "waveform" => vec![Method::Waveform],
+        Some(m) if m == "spectral" => vec![Method::Spectral],
+        _ => vec![Method::Waveform, Method::Spectral],
+    };
+    let verbose = args.iter().any(|a| a == "--verbose");
+    println!("| set | method | F1 | precision | recall | onset F1 | latency median ms | latency p95 ms |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for method in methods {
+        let settings = DetectorSettings {
+            method,
+            ..DetectorSettings::default()
+        };
+        let show = |set: &str, s: &Score| {
+            row(set, method, s);
+            if verbose {
+                eprintln!("{set} {method:?}\n{}", onomato::eval::render_text(s));
+            }
+        };
+        show(
+            "isolated, gaps 30-700 ms",
+            &isolated(&dir, &settings, (0.03, 0.7), 1),
+        );
+        show(
+            "isolated, gaps 30-120 ms",
+            &isolated(&dir, &settings, (0.03, 0.12), 2),
+        );
+        for (name, s) in beats(&dir, &settings) {
+            show(&name, &s);
+        }
+    }
+}

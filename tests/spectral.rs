@@ -1,0 +1,254 @@
+//! The spectral method on synthetic vocal-percussion-like sounds. Unlike the waveform
+//! tests, the recording holds other instances than the enrolled takes (other noise,
+//! other pitch, other level), as a voice does: labels, onsets, decision latency, block
+//! size, sounds that are none of the patterns, held sounds and strength order.
+
+mod common;
+
+use common::*;
+use onomato::analyze::detect_in_blocks;
+use onomato::config::{DetectorSettings, Method, PatternKind};
+use onomato::eval::{score, Annotation};
+use onomato::{Detector, Event, Pattern};
+
+fn spectral() -> DetectorSettings {
+    DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    }
+}
+
+/// First difference: tilts a spectrum up by 6 dB per octave.
+fn brighten(x: &[f32]) -> Vec<f32> {
+    let mut prev = 0.0;
+    x.iter()
+        .map(|&v| {
+            let d = v - prev;
+            prev = v;
+            d
+        })
+        .collect()
+}
+
+/// A kick-like "b": a sine falling from about 160 to 50 Hz under a fast decay.
+fn kick(seed: u64) -> Vec<f32> {
+    let mut rng = Rng::new(seed);
+    let f0 = 160.0 * rng.range(0.95, 1.05);
+    sweep(RATE, 0.15, f0, 50.0, 0.05)
+}
+
+/// A hat-like "ts": bright noise under a decay.
+fn hat(seed: u64) -> Vec<f32> {
+    let x = brighten(&brighten(&noise_burst(RATE, 0.12, 0.04, seed)));
+    x.iter().map(|v| v * 0.5).collect()
+}
+
+/// A snare-like "k": mid noise with a low tone.
+fn snare(seed: u64) -> Vec<f32> {
+    let mut rng = Rng::new(seed);
+    let noise = brighten(&noise_burst(RATE, 0.14, 0.05, seed));
+    let tone = sweep(RATE, 0.14, 220.0 * rng.range(0.95, 1.05), 180.0, 0.04);
+    noise
+        .iter()
+        .zip(&tone)
+        .map(|(n, t)| 0.7 * n + 0.5 * t)
+        .collect()
+}
+
+fn maker(label: &str) -> fn(u64) -> Vec<f32> {
+    match label {
+        "b" => kick,
+        "ts" => hat,
+        _ => snare,
+    }
+}
+
+fn enrol(settings: &DetectorSettings) -> Vec<Pattern> {
+    ["b", "ts", "k"]
+        .iter()
+        .map(|l| {
+            Pattern::from_samples(l, PatternKind::Impulse, vec![maker(l)(1)], settings).unwrap()
+        })
+        .collect()
+}
+
+/// Other instances of the three sounds, gaps of `gaps` seconds, -9..0 dB, light noise.
+fn sequence(gaps: (f64, f64), seed: u64) -> (Vec<f32>, Vec<Annotation>, Vec<f32>) {
+    let mut rng = Rng::new(seed);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    let mut gains = Vec::new();
+    for i in 0..60u64 {
+        let label = ["b", "ts", "k"][(rng.next_u64() % 3) as usize];
+        let sound = maker(label)(100 + i);
+        let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
+        truth.push(Annotation {
+            onset: rec.len() as f64 / f64::from(RATE),
+            label: label.into(),
+            end: None,
+        });
+        gains.push(gain);
+        rec.extend(sound.iter().map(|v| v * gain));
+        rec.extend(vec![0.0; samples_for(rng.range(gaps.0, gaps.1), RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, seed);
+    (rec, truth, gains)
+}
+
+fn detect(settings: &DetectorSettings, rec: &[f32], block: usize) -> Vec<Event> {
+    let mut det = Detector::new(enrol(settings), settings, RATE).unwrap();
+    detect_in_blocks(&mut det, rec, block)
+}
+
+#[test]
+fn other_takes_are_labelled_and_decided_within_30_ms() {
+    for gaps in [(0.03, 0.7), (0.03, 0.12)] {
+        let (rec, truth, _) = sequence(gaps, 5);
+        let events = detect(&spectral(), &rec, 256);
+        let s = score(&events, &truth, 0.05);
+        assert!(
+            s.overall.f1 >= 0.95,
+            "gaps {gaps:?}: {}",
+            onomato::eval::render_text(&s)
+        );
+        let p95 = s.latency_p95.unwrap();
+        assert!(p95 <= 0.030, "p95 latency {p95}");
+        // Onsets to a few ms.
+        for e in &events {
+            let nearest = truth
+                .iter()
+                .map(|t| (t.onset - e.time).abs())
+                .fold(f64::INFINITY, f64::min);
+            assert!(nearest <= 0.005, "{e:?} is {nearest} s from its onset");
+        }
+    }
+}
+
+#[test]
+fn the_spectral_method_beats_the_waveform_method_on_other_takes() {
+    let (rec, truth, _) = sequence((0.03, 0.7), 6);
+    let f1 = |method| {
+        let settings = DetectorSettings {
+            method,
+            ..DetectorSettings::default()
+        };
+        score(&detect(&settings, &rec, 512), &truth, 0.05)
+            .overall
+            .f1
+    };
+    let (spectral, waveform) = (f1(Method::Spectral), f1(Method::Waveform));
+    assert!(
+        spectral >= waveform + 0.3,
+        "spectral {spectral} vs waveform {waveform}"
+    );
+}
+
+#[test]
+fn block_size_does_not_change_any_spectral_event() {
+    let (rec, _, _) = sequence((0.03, 0.3), 7);
+    let reference = detect(&spectral(), &rec, rec.len());
+    assert!(reference.len() > 50);
+    for block in [1, 64, 256, 1024] {
+        assert_eq!(
+            detect(&spectral(), &rec, block),
+            reference,
+            "block size {block}"
+        );
+    }
+}
+
+#[test]
+fn strength_follows_the_level_of_each_sound() {
+    let settings = spectral();
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let gains = [1.0f32, 0.25, 0.6, 0.1, 0.8, 0.4];
+    for (i, g) in gains.iter().enumerate() {
+        rec.extend(kick(200 + i as u64).iter().map(|v| v * g));
+        rec.extend(vec![0.0; samples_for(0.3, RATE)]);
+    }
+    add_noise(&mut rec, 0.0002, 3);
+    let events = detect(&settings, &rec, 256);
+    assert_eq!(events.len(), gains.len(), "{events:#?}");
+    let mut by_gain: Vec<(f32, f64)> = gains
+        .iter()
+        .cloned()
+        .zip(events.iter().map(|e| e.strength))
+        .collect();
+    by_gain.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for w in by_gain.windows(2) {
+        assert!(
+            w[0].1 < w[1].1,
+            "strength order does not follow gain: {by_gain:?}"
+        );
+    }
+}
+
+#[test]
+fn held_sounds_are_one_event_each_with_their_span() {
+    let settings = spectral();
+    // A held "chhh": bright noise with 10 ms fades.
+    let chhh = |seconds: f64, seed: u64| -> Vec<f32> {
+        let x = brighten(&noise_burst(RATE, seconds, 1e9, seed));
+        let n = x.len();
+        let fade = samples_for(0.01, RATE);
+        x.iter()
+            .enumerate()
+            .map(|(i, v)| 0.5 * v * (i.min(n - 1 - i) as f32 / fade as f32).min(1.0))
+            .collect()
+    };
+    let patterns = vec![
+        Pattern::from_samples(
+            "chhh",
+            PatternKind::Continuous,
+            vec![chhh(0.4, 1)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
+    ];
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    for (i, seconds) in [0.3, 1.2, 2.0, 0.6].iter().enumerate() {
+        let at = rec.len() as f64 / f64::from(RATE);
+        truth.push(Annotation {
+            onset: at,
+            label: "chhh".into(),
+            end: Some(at + seconds),
+        });
+        rec.extend(chhh(*seconds, 50 + i as u64).iter().map(|v| v * 0.7));
+        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+        let at = rec.len() as f64 / f64::from(RATE);
+        truth.push(Annotation {
+            onset: at,
+            label: "b".into(),
+            end: None,
+        });
+        rec.extend(kick(60 + i as u64));
+        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 9);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let s = score(&events, &truth, 0.05);
+    assert_eq!(
+        s.overall.f1,
+        1.0,
+        "{}\n{events:#?}",
+        onomato::eval::render_text(&s)
+    );
+    assert!(
+        s.mean_iou.unwrap() >= 0.8,
+        "{}",
+        onomato::eval::render_text(&s)
+    );
+    for e in events.iter().filter(|e| e.end.is_some()) {
+        let t = truth
+            .iter()
+            .find(|t| (t.onset - e.time).abs() < 0.05)
+            .unwrap();
+        assert!(
+            (e.end.unwrap() - t.end.unwrap()).abs() <= 0.05,
+            "{e:?} vs {t:?}"
+        );
+    }
+}
