@@ -41,7 +41,7 @@ const HIGH_HZ: f64 = 11_000.0;
 /// Bands are floored this far below the frame's loudest band.
 const BAND_RANGE_DB: f32 = 60.0;
 /// An onset needs the level to rise this much over the lowest of the frames just before.
-const ONSET_RISE_DB: f32 = 6.0;
+const ONSET_RISE_DB: f32 = 4.0;
 const RISE_FRAMES: u64 = 6;
 /// An onset is placed on the samples this many frames after its detection, once the
 /// attack has arrived.
@@ -56,7 +56,7 @@ const MIN_ONSET_GAP_SECONDS: f64 = 0.040;
 /// Mean of the onset function over this long sets the adaptive threshold.
 const FLUX_MEAN_SECONDS: f64 = 0.25;
 /// Margin of the flux over its recent mean, dB summed over bands.
-const FLUX_MARGIN_DB: f32 = 40.0;
+const FLUX_MARGIN_DB: f32 = 20.0;
 /// An onset needs a frame this far above the noise floor, dB.
 const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 /// The noise floor follows quieter frames at once and rises this fast, dB per second.
