@@ -40,6 +40,11 @@ const LOW_HZ: f64 = 80.0;
 const HIGH_HZ: f64 = 11_000.0;
 /// Bands are floored this far below the frame's loudest band.
 const BAND_RANGE_DB: f32 = 60.0;
+/// The frames between these times before an onset must be `PRE_QUIET_DB` below the
+/// sound's peak.
+const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
+const PRE_QUIET_TO_SECONDS: f64 = 0.010;
+const PRE_QUIET_DB: f32 = 10.0;
 /// An onset needs the level to rise this much over the lowest of the frames just before.
 const ONSET_RISE_DB: f32 = 4.0;
 const RISE_FRAMES: u64 = 6;
@@ -592,6 +597,25 @@ impl SpectralMatcher {
                     best_template = ti;
                 }
             }
+        }
+        // A vocal hit stands out of relative quiet; a consonant inside speech follows a
+        // vowel. Reject onsets whose last tens of milliseconds were nearly as loud.
+        // The frames considered are those whose whole window lies in the quiet span.
+        let cap = self.frame_capacity as u64;
+        let hop = self.hop() as u64;
+        let win = self.analyzer.win as u64;
+        let peak = (onset_frame..self.frame_count)
+            .map(|f| self.levels[(f % cap) as usize])
+            .fold(f32::NEG_INFINITY, f32::max);
+        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
+        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
+        let (first, last) = (quiet_from.div_ceil(hop), quiet_to.saturating_sub(win) / hop);
+        let pre = (first..=last)
+            .filter(|&f| f < self.frame_count && f + cap > self.frame_count && last >= first)
+            .map(|f| self.levels[(f % cap) as usize])
+            .fold(f32::NEG_INFINITY, f32::max);
+        if peak - pre < PRE_QUIET_DB {
+            return;
         }
         let template = &self.templates[best_template];
         let pi = template.pattern;
