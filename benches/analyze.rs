@@ -1,8 +1,8 @@
 //! `cargo bench --bench analyze`: the waveform detector on a 15 s recording with 3 and 8
 //! patterns, against the paper's computation (direct O(N·M) normalised correlation of
 //! every pattern, `direct_ncc`) on the same signals; the same comparison for one
-//! pattern of 0.1, 0.3 and 1 s; and `analyze_file` end to end on a 44.1 kHz WAV
-//! (reading and resampling included).
+//! pattern of 0.1, 0.3 and 1 s; the spectral detector on 15 and 60 s; and
+//! `analyze_file` end to end on a 44.1 kHz WAV (reading and resampling included).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -105,6 +105,29 @@ fn bench_detector(c: &mut Criterion) {
     group.finish();
 }
 
+/// The spectral detector with 3 and 8 patterns on 15 s, and with 8 on 60 s: the same
+/// time per second of audio on both lengths shows that per-block work does not grow.
+fn bench_spectral(c: &mut Criterion) {
+    let settings = DetectorSettings {
+        method: onomato::config::Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    let bank = pattern_bank();
+    let rec15 = recording(&bank);
+    let rec60: Vec<f32> = rec15.iter().cycle().take(rec15.len() * 4).cloned().collect();
+    let mut group = c.benchmark_group("spectral");
+    for (n, rec, label) in [(3usize, &rec15, "15s"), (8, &rec15, "15s"), (8, &rec60, "60s")] {
+        let pats = patterns(&bank, n, &settings);
+        group.bench_function(BenchmarkId::new(format!("{label}_patterns"), n), |b| {
+            b.iter(|| {
+                let mut det = Detector::new(pats.clone(), &settings, RATE).unwrap();
+                black_box(detect_in_blocks(&mut det, black_box(rec), 256))
+            })
+        });
+    }
+    group.finish();
+}
+
 /// One pattern of growing length: the direct cost grows with the length, the FFT cost
 /// with its logarithm.
 fn bench_length_sweep(c: &mut Criterion) {
@@ -167,6 +190,7 @@ fn bench_analyze_file(c: &mut Criterion) {
 criterion_group!(
     benches,
     bench_detector,
+    bench_spectral,
     bench_length_sweep,
     bench_analyze_file
 );
