@@ -114,9 +114,18 @@ fn bench_spectral(c: &mut Criterion) {
     };
     let bank = pattern_bank();
     let rec15 = recording(&bank);
-    let rec60: Vec<f32> = rec15.iter().cycle().take(rec15.len() * 4).cloned().collect();
+    let rec60: Vec<f32> = rec15
+        .iter()
+        .cycle()
+        .take(rec15.len() * 4)
+        .cloned()
+        .collect();
     let mut group = c.benchmark_group("spectral");
-    for (n, rec, label) in [(3usize, &rec15, "15s"), (8, &rec15, "15s"), (8, &rec60, "60s")] {
+    for (n, rec, label) in [
+        (3usize, &rec15, "15s"),
+        (8, &rec15, "15s"),
+        (8, &rec60, "60s"),
+    ] {
         let pats = patterns(&bank, n, &settings);
         group.bench_function(BenchmarkId::new(format!("{label}_patterns"), n), |b| {
             b.iter(|| {

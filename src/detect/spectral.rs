@@ -3,18 +3,20 @@
 //!
 //! Frames: 256-sample Hann windows every 64 samples (at 22.05 kHz: 11.6 ms every
 //! 2.9 ms), 32 mel bands from 80 Hz to 11 kHz, in dB, floored 60 dB below the loudest
-//! band. Onsets: spectral flux (the rise of every band over the frame before), a local
-//! maximum above an adaptive threshold (its recent mean plus a margin), a frame level
-//! clearly above the tracked noise floor, and at least 40 ms since the previous onset.
-//! The onset time is refined on the samples (first 1.5 ms block within 12 dB of the
-//! sound's loudest in its first frames).
+//! band. Onsets (on the newest frame, no look-ahead): spectral flux (the rise of every
+//! band over the frame before) 20 dB over its mean of the last 250 ms; a level 15 dB
+//! over the tracked noise floor and 4 dB over the frames just before (a pitch gliding
+//! between bands is no onset); the previous sound fallen 9 dB below its peak (a "t-s" is
+//! one sound); at least 40 ms since the previous onset. A few frames later the onset is
+//! placed on the samples (first 1.5 ms block within 12 dB of the loudest), and must
+//! stand 10 dB out of the 40-10 ms before it (a consonant inside speech follows a vowel).
 //!
-//! Classification: the first `decision_frames` frames from the onset, flattened and
-//! compared with the same frames of every enrolment take by Pearson correlation (so the
-//! level does not matter), allowing a shift of ±2 frames. The best pattern wins if its
-//! score passes its threshold; below, the sound is none of the patterns (a cough, a
-//! word) and nothing fires. Each onset is decided once, so a sound never gives two
-//! events.
+//! Classification: the frames of the first `decision_seconds` from the onset (the
+//! first one centred on it) are pooled into one mean spectrum, floored 50 dB below its
+//! loudest band, and compared with the same of every enrolment take by correlation (so
+//! the level does not matter), allowing a shift of ±1 frame. The best pattern wins if
+//! its score passes its threshold; below, the sound is none of the patterns and nothing
+//! fires. Each onset is decided once, so a sound never gives two events.
 //!
 //! Continuous patterns: after an onset classified as one, the event is held while each
 //! frame still resembles the pattern's sustained spectrum (its mean frame after the
@@ -218,8 +220,10 @@ impl Analyzer {
     }
 }
 
-/// Sub-windows the decision frames are pooled into.
-const POOLS: usize = 2;
+/// Sub-windows the decision frames are pooled into. One mean spectrum scored best on
+/// the real recordings (`examples/eval_beatbox.rs`): finer time detail (2 or 3
+/// sub-windows) follows the articulation of one take too closely.
+const POOLS: usize = 1;
 /// Pooled bands are floored this far below the loudest pooled band.
 const POOLED_RANGE_DB: f32 = 50.0;
 const FEATURES: usize = POOLS * BANDS;
