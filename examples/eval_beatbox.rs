@@ -11,6 +11,9 @@
 //! - beats: one instance of each label is enrolled from rec2 (cut around its annotated
 //!   onset) and detected on rec3 and rec4; rec6's labels that rec2 lacks are enrolled
 //!   from rec6's first instance, and rec6 is detected whole.
+//! - repeated: each file repeats one sound; the first instance of every file is
+//!   enrolled, and every repetition must be found with its own file's label. Onsets
+//!   come from a simple energy rule (`repeated_onsets`), as the files have no labels.
 //!
 //! Scores: `onomato::eval` (label and onset within 50 ms, one to one).
 
@@ -166,6 +169,72 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
     out
 }
 
+/// Onsets of a file that repeats one sound: 10 ms RMS frames rising above 20 dB below
+/// the file's loudest after having fallen 30 dB below it. A simple rule, independent of
+/// the detector, for recordings that come without annotations.
+fn repeated_onsets(x: &[f32]) -> Vec<f64> {
+    let hop = (RATE / 100) as usize;
+    let db: Vec<f32> = x
+        .chunks_exact(hop)
+        .map(|c| 10.0 * (c.iter().map(|v| v * v).sum::<f32>() / hop as f32 + 1e-12).log10())
+        .collect();
+    let loudest = db.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
+    let mut onsets = Vec::new();
+    let mut armed = true;
+    for (i, &v) in db.iter().enumerate() {
+        if armed && v > loudest - 20.0 {
+            onsets.push(i as f64 * 0.01);
+            armed = false;
+        }
+        if v < loudest - 30.0 {
+            armed = true;
+        }
+    }
+    onsets
+}
+
+/// repeated/: the first instance of every file is enrolled (one pattern per sound);
+/// each file must give its own label at every repetition. Files are scored together.
+fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
+    let sounds = ["bass", "cymbal", "hi-hat", "snare", "tom"];
+    let mut recs = Vec::new();
+    let mut patterns = Vec::new();
+    for sound in sounds {
+        let rec = read(&dir.join("repeated").join(format!("{sound}-1.wav")));
+        let onsets = repeated_onsets(&rec);
+        let label = label_name(sound);
+        let truth: Vec<Annotation> = onsets
+            .iter()
+            .map(|&t| Annotation {
+                onset: t,
+                label: label.clone(),
+                end: None,
+            })
+            .collect();
+        if let Some(take) = cut_first(&rec, &truth, &label) {
+            patterns.push(pattern(&label, take, settings));
+        }
+        recs.push((rec, truth));
+    }
+    // One score over all files: each file's times are moved to their own 1000 s slot.
+    let mut all_events = Vec::new();
+    let mut all_truth = Vec::new();
+    for (i, (rec, truth)) in recs.iter().enumerate() {
+        let offset = 1000.0 * i as f64;
+        let mut det = Detector::new(patterns.clone(), settings, RATE).unwrap();
+        for mut e in detect_in_blocks(&mut det, rec, 256) {
+            e.time += offset;
+            e.emitted_at += offset;
+            all_events.push(e);
+        }
+        all_truth.extend(truth.iter().map(|t| Annotation {
+            onset: t.onset + offset,
+            ..t.clone()
+        }));
+    }
+    score(&all_events, &all_truth, 0.05)
+}
+
 fn row(set: &str, method: Method, s: &Score) {
     let ms = |x: Option<f64>| x.map_or("-".into(), |v| format!("{:.0}", v * 1000.0));
     println!(
@@ -223,5 +292,6 @@ fn main() {
         for (name, s) in beats(&dir, &settings) {
             show(&name, &s);
         }
+        show("repeated (5 sounds, 56 repetitions)", &repeated(&dir, &settings));
     }
 }
