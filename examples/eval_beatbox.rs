@@ -292,6 +292,9 @@ fn main() {
         for (name, s) in beats(&dir, &settings) {
             show(&name, &s);
         }
-        show("repeated (5 sounds, 56 repetitions)", &repeated(&dir, &settings));
+        show(
+            "repeated (5 sounds, 56 repetitions)",
+            &repeated(&dir, &settings),
+        );
     }
 }

@@ -107,7 +107,7 @@ pub fn write_json(
 }
 
 /// Header of the CSV output.
-pub const CSV_HEADER: &str = "id,pattern,kind,time,end,strength,score,emitted_at";
+pub const CSV_HEADER: &str = "id,pattern,kind,time,end,strength,score,emitted_at,pitch";
 
 /// Writes a header and one row per event. Pattern names cannot hold commas or quotes
 /// (see [`crate::config::check_pattern_name`]), so no quoting is needed.
@@ -115,9 +115,10 @@ pub fn write_csv(out: &mut dyn Write, events: &[Event]) -> std::io::Result<()> {
     writeln!(out, "{CSV_HEADER}")?;
     for e in events {
         let end = e.end.map(|x| format!("{x:.5}")).unwrap_or_default();
+        let pitch = e.pitch.map(|x| format!("{x:.1}")).unwrap_or_default();
         writeln!(
             out,
-            "{},{},{},{:.5},{},{:.4},{:.4},{:.5}",
+            "{},{},{},{:.5},{},{:.4},{:.4},{:.5},{}",
             e.id,
             e.pattern,
             e.kind.as_str(),
@@ -125,7 +126,8 @@ pub fn write_csv(out: &mut dyn Write, events: &[Event]) -> std::io::Result<()> {
             end,
             e.strength,
             e.score,
-            e.emitted_at
+            e.emitted_at,
+            pitch
         )?;
     }
     Ok(())

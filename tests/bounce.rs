@@ -18,6 +18,7 @@ fn hit(id: u64, pattern: &str, time: f64, strength: f64) -> Event {
         strength,
         score: 0.9,
         emitted_at: time + 0.1,
+        pitch: None,
     }
 }
 

@@ -180,11 +180,11 @@ fn analyze_csv_has_a_header_and_a_row_per_event() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("id,pattern,kind,time,end,strength,score,emitted_at")
+        Some("id,pattern,kind,time,end,strength,score,emitted_at,pitch")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), truth().len());
-    assert!(rows.iter().all(|r| r.len() == 8));
+    assert!(rows.iter().all(|r| r.len() == 9));
     let held: Vec<&Vec<&str>> = rows.iter().filter(|r| r[2] == "continuous").collect();
     assert_eq!(held.len(), 2);
     assert!(held.iter().all(|r| !r[4].is_empty()));

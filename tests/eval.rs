@@ -22,6 +22,7 @@ fn ev(pattern: &str, time: f64, end: Option<f64>, latency: f64) -> Event {
         strength: 1.0,
         score: 1.0,
         emitted_at: end.unwrap_or(time) + latency,
+        pitch: None,
     }
 }
 

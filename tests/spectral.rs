@@ -252,3 +252,53 @@ fn held_sounds_are_one_event_each_with_their_span() {
         );
     }
 }
+
+#[test]
+fn held_voiced_sounds_report_their_pitch_and_noisy_ones_none() {
+    let settings = spectral();
+    let patterns = vec![Pattern::from_samples(
+        "hum",
+        PatternKind::Continuous,
+        vec![buzz(RATE, 0.3, 140.0)],
+        &settings,
+    )
+    .unwrap()];
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    // The same voice a little higher is still the same held sound, at its own pitch.
+    for (seconds, f0) in [(0.8, 140.0), (1.2, 160.0)] {
+        let at = rec.len() as f64 / f64::from(RATE);
+        truth.push((at, at + seconds, f0));
+        rec.extend(buzz(RATE, seconds, f0).iter().map(|v| v * 0.8));
+        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 4);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert_eq!(events.len(), truth.len(), "{events:#?}");
+    for (e, (at, end, f0)) in events.iter().zip(truth) {
+        assert!(
+            (e.time - at).abs() <= 0.05 && (e.end.unwrap() - end).abs() <= 0.05,
+            "{e:?}"
+        );
+        let pitch = e.pitch.expect("a voiced held sound has a pitch");
+        assert!((pitch - f0).abs() / f0 < 0.02, "pitch {pitch} vs {f0}");
+    }
+
+    // A held noise has no pitch.
+    let hiss = brighten(&noise_burst(RATE, 0.8, 1e9, 8));
+    let patterns = vec![Pattern::from_samples(
+        "shhh",
+        PatternKind::Continuous,
+        vec![brighten(&noise_burst(RATE, 0.3, 1e9, 7))],
+        &settings,
+    )
+    .unwrap()];
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    rec.extend(hiss.iter().map(|v| v * 0.5));
+    rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert_eq!(events.len(), 1, "{events:#?}");
+    assert_eq!(events[0].pitch, None);
+}

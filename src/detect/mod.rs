@@ -71,6 +71,10 @@ pub struct Event {
     /// Stream time at which the detector decided.
     #[serde(serialize_with = "seconds")]
     pub emitted_at: f64,
+    /// Fundamental frequency of a held voiced sound, Hz (spectral method; absent for
+    /// impulses and unvoiced sounds).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_hertz")]
+    pub pitch: Option<f64>,
 }
 
 fn round_to(x: f64, digits: i32) -> f64 {
@@ -85,6 +89,13 @@ pub(crate) fn seconds<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
 pub(crate) fn opt_seconds<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
     match x {
         Some(v) => s.serialize_f64(round_to(*v, 5)),
+        None => s.serialize_none(),
+    }
+}
+
+fn opt_hertz<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match x {
+        Some(v) => s.serialize_f64(round_to(*v, 1)),
         None => s.serialize_none(),
     }
 }

@@ -21,7 +21,8 @@
 //! Continuous patterns: after an onset classified as one, the event is held while each
 //! frame still resembles the pattern's sustained spectrum (its mean frame after the
 //! onset, Pearson ≥ the continuous threshold) and stays within 20 dB of the event's
-//! loudest frame; it ends after 30 ms of frames that do not.
+//! loudest frame; it ends after 30 ms of frames that do not. A voiced held sound also
+//! reports its pitch (normalised autocorrelation over 100 ms of its middle, 60-500 Hz).
 //!
 //! Runs on the detector thread. FFT plan, mel bank, rings and templates are made in
 //! [`SpectralMatcher::new`]; `push` allocates nothing.
@@ -47,6 +48,11 @@ const BAND_RANGE_DB: f32 = 60.0;
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.010;
 const PRE_QUIET_DB: f32 = 10.0;
+const PITCH_MIN_HZ: f64 = 60.0;
+const PITCH_MAX_HZ: f64 = 500.0;
+const PITCH_WINDOW_SECONDS: f64 = 0.1;
+/// A held sound is voiced when its autocorrelation reaches this at some lag.
+const VOICED_CORRELATION: f64 = 0.6;
 /// An onset needs the level to rise this much over the lowest of the frames just before.
 const ONSET_RISE_DB: f32 = 4.0;
 const RISE_FRAMES: u64 = 6;
@@ -650,6 +656,7 @@ impl SpectralMatcher {
                 strength,
                 score: f64::from(best_score),
                 emitted_at,
+                pitch: None,
             }),
             PatternKind::Continuous => {
                 if let Some(h) = self.held.take() {
@@ -697,7 +704,6 @@ impl SpectralMatcher {
     }
 
     fn close_held(&mut self, h: Held, out: &mut Vec<Event>) {
-        let info = &self.patterns[h.pattern];
         // The sound ends at the end of the last matching frame's centre hop.
         let end_sample = (self.frame_start(h.last_good_frame)
             + self.analyzer.win as i64 / 2
@@ -710,6 +716,8 @@ impl SpectralMatcher {
         // Mean power over the held sound (its most recent half second when longer).
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
+        let pitch = self.estimate_pitch(lo, hi);
+        let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
             pattern: info.name.clone(),
@@ -719,7 +727,57 @@ impl SpectralMatcher {
             strength: (power / info.power.max(1e-12)).sqrt(),
             score: f64::from(h.score),
             emitted_at: self.consumed as f64 / self.rate,
+            pitch,
         });
+    }
+
+    /// Fundamental frequency (60-500 Hz) over the middle of samples [lo, hi), by
+    /// normalised autocorrelation: the shortest lag whose correlation is within 10% of
+    /// the best. `None` when the best correlation is below `VOICED_CORRELATION`
+    /// (unvoiced, noisy) or the span is too short. Reads the sample ring in place.
+    fn estimate_pitch(&self, lo: u64, hi: u64) -> Option<f64> {
+        let min_lag = (self.rate / PITCH_MAX_HZ).floor() as u64;
+        let max_lag = (self.rate / PITCH_MIN_HZ).ceil() as u64;
+        let span = hi.saturating_sub(lo);
+        let len = ((PITCH_WINDOW_SECONDS * self.rate) as u64).min(span.saturating_sub(max_lag + 1));
+        if len < 2 * max_lag {
+            return None;
+        }
+        let start = lo + (span - len - max_lag) / 2;
+        let corr = |lag: u64| {
+            let (mut xy, mut xx, mut yy) = (0.0f64, 0.0f64, 0.0f64);
+            for n in start..start + len {
+                let (x, y) = (f64::from(self.sample(n)), f64::from(self.sample(n + lag)));
+                xy += x * y;
+                xx += x * x;
+                yy += y * y;
+            }
+            if xx > 0.0 && yy > 0.0 {
+                xy / (xx * yy).sqrt()
+            } else {
+                0.0
+            }
+        };
+        let best = (min_lag..=max_lag)
+            .map(corr)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if best < VOICED_CORRELATION {
+            return None;
+        }
+        let lag = (min_lag..=max_lag).find(|&l| corr(l) >= 0.9 * best)?;
+        // Walk up to the local peak, then refine it with a parabola through 3 points.
+        let mut lag = lag;
+        while lag < max_lag && corr(lag + 1) > corr(lag) {
+            lag += 1;
+        }
+        let (a, b, c) = (corr(lag - 1), corr(lag), corr(lag + 1));
+        let denom = a - 2.0 * b + c;
+        let shift = if denom.abs() > 1e-12 {
+            0.5 * (a - c) / denom
+        } else {
+            0.0
+        };
+        Some(self.rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
     }
 }
 

@@ -558,6 +558,7 @@ impl WaveformMatcher {
                 strength: (c.window_energy / tmpl.energy).sqrt(),
                 score: f64::from(c.value),
                 emitted_at,
+                pitch: None,
             });
         }
         // A peak matters while a candidate within its window may still be undecided.
@@ -700,6 +701,7 @@ impl WaveformMatcher {
                 strength: (span_power / pattern_power).sqrt(),
                 score: f64::from(open.best_score),
                 emitted_at,
+                pitch: None,
             });
         }
     }
