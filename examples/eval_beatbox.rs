@@ -1,6 +1,7 @@
 //! Accuracy and latency on real human vocal percussion, for both methods.
 //!
 //!     cargo run --release --example eval_beatbox -- BEATBOX_DIR [--method waveform|spectral]
+//!         [--threshold X] [--verbose]
 //!
 //! BEATBOX_DIR holds isolated/{b,c,ts}/*.wav (single hits), beats/*.wav with their
 //! annotation CSVs, and repeated/*.wav (see the recordings' own README). The sets:
@@ -255,7 +256,7 @@ fn row(set: &str, method: Method, s: &Score) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(dir) = args.first().map(PathBuf::from) else {
-        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--verbose]");
+        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose]");
         std::process::exit(2);
     };
     let methods = match args
@@ -268,11 +269,19 @@ fn main() {
         _ => vec![Method::Waveform, Method::Spectral],
     };
     let verbose = args.iter().any(|a| a == "--verbose");
+    let threshold = match args.iter().position(|a| a == "--threshold").and_then(|i| args.get(i + 1)) {
+        Some(t) => t.parse::<f64>().unwrap_or_else(|_| {
+            eprintln!("--threshold takes a number from 0 to 1, found '{t}'");
+            std::process::exit(2);
+        }),
+        None => DetectorSettings::default().threshold,
+    };
     println!("| set | method | F1 | precision | recall | onset F1 | latency median ms | latency p95 ms |");
     println!("|---|---|---|---|---|---|---|---|");
     for method in methods {
         let settings = DetectorSettings {
             method,
+            threshold,
             ..DetectorSettings::default()
         };
         let show = |set: &str, s: &Score| {
