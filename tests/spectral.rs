@@ -302,3 +302,22 @@ fn held_voiced_sounds_report_their_pitch_and_noisy_ones_none() {
     assert_eq!(events.len(), 1, "{events:#?}");
     assert_eq!(events[0].pitch, None);
 }
+
+#[test]
+fn more_enrolment_takes_do_not_make_it_worse() {
+    let settings = spectral();
+    let (rec, truth, _) = sequence((0.03, 0.4), 11);
+    let f1_with = |takes: u64| {
+        let patterns: Vec<Pattern> = ["b", "ts", "k"]
+            .iter()
+            .map(|l| {
+                let samples = (1..=takes).map(|seed| maker(l)(seed)).collect();
+                Pattern::from_samples(l, PatternKind::Impulse, samples, &settings).unwrap()
+            })
+            .collect();
+        let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+        score(&detect_in_blocks(&mut det, &rec, 256), &truth, 0.05).overall.f1
+    };
+    let (one, three) = (f1_with(1), f1_with(3));
+    assert!(three >= one && three >= 0.95, "1 take: F1 {one}; 3 takes: F1 {three}");
+}
