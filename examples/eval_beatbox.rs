@@ -269,7 +269,11 @@ fn main() {
         _ => vec![Method::Waveform, Method::Spectral],
     };
     let verbose = args.iter().any(|a| a == "--verbose");
-    let threshold = match args.iter().position(|a| a == "--threshold").and_then(|i| args.get(i + 1)) {
+    let threshold = match args
+        .iter()
+        .position(|a| a == "--threshold")
+        .and_then(|i| args.get(i + 1))
+    {
         Some(t) => t.parse::<f64>().unwrap_or_else(|_| {
             eprintln!("--threshold takes a number from 0 to 1, found '{t}'");
             std::process::exit(2);

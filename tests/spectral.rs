@@ -316,8 +316,13 @@ fn more_enrolment_takes_do_not_make_it_worse() {
             })
             .collect();
         let mut det = Detector::new(patterns, &settings, RATE).unwrap();
-        score(&detect_in_blocks(&mut det, &rec, 256), &truth, 0.05).overall.f1
+        score(&detect_in_blocks(&mut det, &rec, 256), &truth, 0.05)
+            .overall
+            .f1
     };
     let (one, three) = (f1_with(1), f1_with(3));
-    assert!(three >= one && three >= 0.95, "1 take: F1 {one}; 3 takes: F1 {three}");
+    assert!(
+        three >= one && three >= 0.95,
+        "1 take: F1 {one}; 3 takes: F1 {three}"
+    );
 }

@@ -1,0 +1,153 @@
+//! Held sounds of a synthetic voice (espeak-ng), with the spectral method: a steady
+//! "sh" and a vowel sung on one note, stretched by sox to 0.3-2 s, must each give one
+//! event whose begin and end are within 50 ms of the sound's and whose IoU is at least
+//! 0.8; the vowel reports its pitch, the "sh" none. Needs espeak-ng and sox, which
+//! scripts/test.sh installs.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::*;
+use onomato::analyze::detect_in_blocks;
+use onomato::audio::{resample_clip, ChannelSelect, WavSource};
+use onomato::config::{DetectorSettings, Method, PatternKind};
+use onomato::{Detector, Pattern};
+
+fn run(program: &str, args: &[&str]) {
+    let out = Command::new(program)
+        .args(args)
+        .env("SOX_OPTS", "-R -D")
+        .output()
+        .unwrap_or_else(|e| panic!("{program} is needed (scripts/test.sh installs it): {e}"));
+    assert!(
+        out.status.success(),
+        "{program} {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read(path: &Path) -> Vec<f32> {
+    let mut src = WavSource::open(path, ChannelSelect::Mix).unwrap();
+    let rate = src.sample_rate();
+    resample_clip(&src.read_all().unwrap(), rate, RATE).unwrap()
+}
+
+/// Where a sound really is: its first and last 10 ms frames within 30 dB of its loudest.
+fn span(x: &[f32]) -> (usize, usize) {
+    let hop = (RATE / 100) as usize;
+    let db: Vec<f32> = x
+        .chunks(hop)
+        .map(|c| 10.0 * (c.iter().map(|v| v * v).sum::<f32>() / c.len() as f32 + 1e-12).log10())
+        .collect();
+    let loudest = db.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
+    let first = db.iter().position(|&d| d > loudest - 30.0).unwrap();
+    let last = db.iter().rposition(|&d| d > loudest - 30.0).unwrap();
+    (first * hop, ((last + 1) * hop).min(x.len()))
+}
+
+#[test]
+fn held_fricatives_and_vowels_of_a_voice_are_found_with_their_span() {
+    let dir = temp_dir("voices");
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    run(
+        "espeak-ng",
+        &["-v", "en", "-w", &p("sh-raw.wav"), "[[SSSSSSSS]]"],
+    );
+    run(
+        "espeak-ng",
+        &[
+            "-v",
+            "en",
+            "-m",
+            "-w",
+            &p("aa-raw.wav"),
+            "<speak><prosody range=\"x-low\">aaaaaaaaa</prosody></speak>",
+        ],
+    );
+    // The steady middle of each, and its first 150 ms as the enrolled take.
+    run(
+        "sox",
+        &[&p("sh-raw.wav"), &p("sh-core.wav"), "trim", "0.1", "0.5"],
+    );
+    run(
+        "sox",
+        &[&p("aa-raw.wav"), &p("aa-core.wav"), "trim", "0.15", "0.2"],
+    );
+    let settings = DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    let take = |core: &str| read(&dir.join(core))[..samples_for(0.15, RATE)].to_vec();
+    let patterns = vec![
+        Pattern::from_samples(
+            "sh",
+            PatternKind::Continuous,
+            vec![take("sh-core.wav")],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples(
+            "aa",
+            PatternKind::Continuous,
+            vec![take("aa-core.wav")],
+            &settings,
+        )
+        .unwrap(),
+    ];
+    let core_len = |core: &str| read(&dir.join(core)).len() as f64 / f64::from(RATE);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for (i, (label, seconds)) in [
+        ("sh", 0.5),
+        ("aa", 0.6),
+        ("sh", 1.5),
+        ("aa", 1.0),
+        ("sh", 0.3),
+        ("aa", 2.0),
+        ("sh", 2.0),
+        ("aa", 0.3),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let core = format!("{label}-core.wav");
+        let tempo = format!("{}", core_len(&core) / seconds);
+        let out = format!("held{i}.wav");
+        run("sox", &[&p(&core), &p(&out), "tempo", "-s", &tempo]);
+        let sound = read(&dir.join(&out));
+        let (a, b) = span(&sound);
+        let at = rec.len();
+        truth.push((
+            label,
+            (at + a) as f64 / f64::from(RATE),
+            (at + b) as f64 / f64::from(RATE),
+        ));
+        rec.extend_from_slice(&sound);
+        rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 12);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert_eq!(events.len(), truth.len(), "{events:#?}\n{truth:?}");
+    for (e, (label, begin, end)) in events.iter().zip(&truth) {
+        let e_end = e.end.expect("held sounds have an end");
+        assert_eq!(&*e.pattern, *label, "{e:?}");
+        assert!(
+            (e.time - begin).abs() <= 0.05,
+            "begin {:.3} vs {begin:.3}: {e:?}",
+            e.time
+        );
+        assert!(
+            (e_end - end).abs() <= 0.05,
+            "end {e_end:.3} vs {end:.3}: {e:?}"
+        );
+        let iou = (e_end.min(*end) - e.time.max(*begin)) / (e_end.max(*end) - e.time.min(*begin));
+        assert!(iou >= 0.8, "IoU {iou:.3}: {e:?} vs {begin:.3}-{end:.3}");
+        match *label {
+            "aa" => assert!(e.pitch.is_some_and(|f| (60.0..300.0).contains(&f)), "{e:?}"),
+            _ => assert_eq!(e.pitch, None, "{e:?}"),
+        }
+    }
+}
