@@ -4,14 +4,16 @@
 //!         [--threshold X] [--verbose]
 //!
 //! BEATBOX_DIR holds isolated/{b,c,ts}/*.wav (single hits), beats/*.wav with their
-//! annotation CSVs, and repeated/*.wav (see the recordings' own README). The sets:
+//! annotation CSVs, and repeated/*.wav (see the recordings' own README). Recordings are
+//! fed to the detector at their own rate (44.1 kHz), so its resampler is part of what
+//! is measured, latency included. The sets:
 //! - isolated: take 01 of each class is enrolled; the other takes are laid out with
 //!   gaps of 30-700 ms (and, in the "tight" set, 30-120 ms), gains of -9..0 dB and low
 //!   noise. The truth onset of a take is its first 1 ms block within 20 dB of its
 //!   loudest.
 //! - beats: one instance of each label is enrolled from rec2 (cut around its annotated
-//!   onset) and detected on rec3 and rec4; rec6's labels that rec2 lacks are enrolled
-//!   from rec6's first instance, and rec6 is detected whole.
+//!   onset) and detected on rec3 (also resampled to 48 kHz) and rec4; rec6's labels
+//!   that rec2 lacks are enrolled from rec6's first instance, and rec6 is detected whole.
 //! - repeated: each file repeats one sound; the first instance of every file is
 //!   enrolled, and every repetition must be found with its own file's label. Onsets
 //!   come from a simple energy rule (`repeated_onsets`), as the files have no labels.
@@ -30,18 +32,22 @@ use onomato::config::{DetectorSettings, Method, PatternKind};
 use onomato::eval::{load_truth, score, Annotation, Score};
 use onomato::{Detector, Pattern};
 
-const RATE: u32 = 22_050;
+/// A recording at its own rate, mono.
+struct Audio {
+    samples: Vec<f32>,
+    rate: u32,
+}
 
-fn read(path: &Path) -> Vec<f32> {
+fn read(path: &Path) -> Audio {
     let mut src = WavSource::open(path, ChannelSelect::Mix).unwrap_or_else(|e| panic!("{e}"));
     let rate = src.sample_rate();
     let samples = src.read_all().unwrap_or_else(|e| panic!("{e}"));
-    resample_clip(&samples, rate, RATE).unwrap()
+    Audio { samples, rate }
 }
 
 /// First 1 ms block within 20 dB of the loudest block.
-fn energy_onset(x: &[f32]) -> usize {
-    let block = (RATE / 1000) as usize;
+fn energy_onset(x: &[f32], rate: u32) -> usize {
+    let block = (rate / 1000) as usize;
     let energies: Vec<f32> = x
         .chunks(block)
         .map(|c| c.iter().map(|v| v * v).sum())
@@ -54,7 +60,9 @@ fn energy_onset(x: &[f32]) -> usize {
         * block
 }
 
-fn pattern(name: &str, take: Vec<f32>, settings: &DetectorSettings) -> Pattern {
+/// A pattern from a take at `rate` (resampled to the working rate for enrolment).
+fn pattern(name: &str, take: &[f32], rate: u32, settings: &DetectorSettings) -> Pattern {
+    let take = resample_clip(take, rate, settings.sample_rate).unwrap();
     Pattern::from_samples(name, PatternKind::Impulse, vec![take], settings)
         .unwrap_or_else(|e| panic!("{e}"))
 }
@@ -62,31 +70,37 @@ fn pattern(name: &str, take: Vec<f32>, settings: &DetectorSettings) -> Pattern {
 fn run(
     patterns: &[Pattern],
     settings: &DetectorSettings,
-    rec: &[f32],
+    rec: &Audio,
     truth: &[Annotation],
 ) -> Score {
-    let mut det = Detector::new(patterns.to_vec(), settings, RATE).unwrap();
-    let events = detect_in_blocks(&mut det, rec, 256);
+    let mut det = Detector::new(patterns.to_vec(), settings, rec.rate).unwrap();
+    let events = detect_in_blocks(&mut det, &rec.samples, 256);
     score(&events, truth, 0.05)
 }
 
 fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64) -> Score {
     let classes = ["b", "c", "ts"];
     let mut patterns = Vec::new();
-    let mut others: Vec<(&str, Vec<f32>)> = Vec::new();
+    let mut others: Vec<(&str, Audio)> = Vec::new();
     for class in classes {
         let mut files: Vec<PathBuf> = std::fs::read_dir(dir.join("isolated").join(class))
             .unwrap()
             .map(|e| e.unwrap().path())
             .collect();
         files.sort();
-        patterns.push(pattern(class, read(&files[0]), settings));
+        let first = read(&files[0]);
+        patterns.push(pattern(class, &first.samples, first.rate, settings));
         for f in &files[1..] {
             others.push((class, read(f)));
         }
     }
+    let rate = others[0].1.rate;
+    assert!(
+        others.iter().all(|(_, a)| a.rate == rate),
+        "one rate per set"
+    );
     let mut rng = Rng::new(seed);
-    let mut rec = vec![0.0f32; RATE as usize / 2];
+    let mut rec = vec![0.0f32; rate as usize / 2];
     let mut truth = Vec::new();
     for _round in 0..3 {
         let mut order: Vec<usize> = (0..others.len()).collect();
@@ -98,17 +112,17 @@ fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64
             let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
             let at = rec.len();
             truth.push(Annotation {
-                onset: (at + energy_onset(take)) as f64 / f64::from(RATE),
+                onset: (at + energy_onset(&take.samples, rate)) as f64 / f64::from(rate),
                 label: class.to_string(),
                 end: None,
             });
-            rec.extend(take.iter().map(|x| x * gain));
+            rec.extend(take.samples.iter().map(|x| x * gain));
             let gap = rng.range(gaps.0, gaps.1);
-            rec.extend(std::iter::repeat_n(0.0, (gap * f64::from(RATE)) as usize));
+            rec.extend(std::iter::repeat_n(0.0, (gap * f64::from(rate)) as usize));
         }
     }
     common::add_noise(&mut rec, 0.001, seed + 1);
-    run(&patterns, settings, &rec, &truth)
+    run(&patterns, settings, &Audio { samples: rec, rate }, &truth)
 }
 
 fn label_name(label: &str) -> String {
@@ -120,14 +134,15 @@ fn label_name(label: &str) -> String {
 
 /// The first instance of `label` in `rec`, cut from 20 ms before its onset to the next
 /// onset (at most 300 ms).
-fn cut_first(rec: &[f32], truth: &[Annotation], label: &str) -> Option<Vec<f32>> {
+fn cut_first(rec: &Audio, truth: &[Annotation], label: &str) -> Option<Vec<f32>> {
     let i = truth.iter().position(|t| t.label == label)?;
-    let start = ((truth[i].onset - 0.02).max(0.0) * f64::from(RATE)) as usize;
+    let rate = f64::from(rec.rate);
+    let start = ((truth[i].onset - 0.02).max(0.0) * rate) as usize;
     let next = truth
         .get(i + 1)
         .map_or(truth[i].onset + 0.3, |t| t.onset - 0.01);
-    let end = ((next.min(truth[i].onset + 0.3)) * f64::from(RATE)) as usize;
-    Some(rec[start..end.min(rec.len())].to_vec())
+    let end = ((next.min(truth[i].onset + 0.3)) * rate) as usize;
+    Some(rec.samples[start..end.min(rec.samples.len())].to_vec())
 }
 
 fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
@@ -140,27 +155,45 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
         }
         (rec, truth)
     };
+    let labels = |truth: &[Annotation]| {
+        let mut l: Vec<String> = truth.iter().map(|t| t.label.clone()).collect();
+        l.sort();
+        l.dedup();
+        l
+    };
     let (rec2, truth2) = load("rsalazar_rec2");
-    let mut labels2: Vec<String> = truth2.iter().map(|t| t.label.clone()).collect();
-    labels2.sort();
-    labels2.dedup();
+    let labels2 = labels(&truth2);
     let enrol2: Vec<Pattern> = labels2
         .iter()
-        .filter_map(|l| Some(pattern(l, cut_first(&rec2, &truth2, l)?, settings)))
+        .filter_map(|l| {
+            Some(pattern(
+                l,
+                &cut_first(&rec2, &truth2, l)?,
+                rec2.rate,
+                settings,
+            ))
+        })
         .collect();
     let mut out = Vec::new();
     for name in ["rsalazar_rec3", "rsalazar_rec4"] {
         let (rec, truth) = load(name);
         out.push((name.to_string(), run(&enrol2, settings, &rec, &truth)));
+        if name == "rsalazar_rec3" {
+            let rec48 = Audio {
+                samples: resample_clip(&rec.samples, rec.rate, 48_000).unwrap(),
+                rate: 48_000,
+            };
+            out.push((
+                format!("{name} at 48 kHz"),
+                run(&enrol2, settings, &rec48, &truth),
+            ));
+        }
     }
     let (rec6, truth6) = load("rsalazar_rec6");
     let mut enrol6 = enrol2.clone();
-    let mut labels6: Vec<String> = truth6.iter().map(|t| t.label.clone()).collect();
-    labels6.sort();
-    labels6.dedup();
-    for l in labels6.iter().filter(|l| !labels2.contains(l)) {
+    for l in labels(&truth6).iter().filter(|l| !labels2.contains(l)) {
         if let Some(take) = cut_first(&rec6, &truth6, l) {
-            enrol6.push(pattern(l, take, settings));
+            enrol6.push(pattern(l, &take, rec6.rate, settings));
         }
     }
     out.push((
@@ -173,9 +206,10 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
 /// Onsets of a file that repeats one sound: 10 ms RMS frames rising above 20 dB below
 /// the file's loudest after having fallen 30 dB below it. A simple rule, independent of
 /// the detector, for recordings that come without annotations.
-fn repeated_onsets(x: &[f32]) -> Vec<f64> {
-    let hop = (RATE / 100) as usize;
-    let db: Vec<f32> = x
+fn repeated_onsets(rec: &Audio) -> Vec<f64> {
+    let hop = (rec.rate / 100) as usize;
+    let db: Vec<f32> = rec
+        .samples
         .chunks_exact(hop)
         .map(|c| 10.0 * (c.iter().map(|v| v * v).sum::<f32>() / hop as f32 + 1e-12).log10())
         .collect();
@@ -202,9 +236,8 @@ fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
     let mut patterns = Vec::new();
     for sound in sounds {
         let rec = read(&dir.join("repeated").join(format!("{sound}-1.wav")));
-        let onsets = repeated_onsets(&rec);
         let label = label_name(sound);
-        let truth: Vec<Annotation> = onsets
+        let truth: Vec<Annotation> = repeated_onsets(&rec)
             .iter()
             .map(|&t| Annotation {
                 onset: t,
@@ -213,7 +246,7 @@ fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
             })
             .collect();
         if let Some(take) = cut_first(&rec, &truth, &label) {
-            patterns.push(pattern(&label, take, settings));
+            patterns.push(pattern(&label, &take, rec.rate, settings));
         }
         recs.push((rec, truth));
     }
@@ -222,8 +255,8 @@ fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
     let mut all_truth = Vec::new();
     for (i, (rec, truth)) in recs.iter().enumerate() {
         let offset = 1000.0 * i as f64;
-        let mut det = Detector::new(patterns.clone(), settings, RATE).unwrap();
-        for mut e in detect_in_blocks(&mut det, rec, 256) {
+        let mut det = Detector::new(patterns.clone(), settings, rec.rate).unwrap();
+        for mut e in detect_in_blocks(&mut det, &rec.samples, 256) {
             e.time += offset;
             e.emitted_at += offset;
             all_events.push(e);

@@ -11,7 +11,9 @@ use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use rubato::audioadapter_buffers::direct::InterleavedSlice;
-use rubato::{Fft, FixedSync, Indexing, Resampler};
+use rubato::{
+    Async, FixedAsync, Indexing, Resampler, SincInterpolationParameters, WindowFunction,
+};
 
 /// Which channel of a multi-channel file becomes the mono signal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -223,14 +225,18 @@ impl WavSource {
     }
 }
 
-/// Input frames per resampler chunk. Small enough to add little latency live.
-const RESAMPLER_CHUNK: usize = 512;
+/// Input frames per resampler chunk: decisions can be taken this often (1.5 ms at
+/// 44.1 kHz), so the chunk adds little latency.
+const RESAMPLER_CHUNK: usize = 64;
+/// Length of the resampler's windowed-sinc filter. Its delay, half of it, is removed
+/// from the output; 128 taps cost about 1.5 ms of latency at 44.1 kHz.
+const RESAMPLER_SINC_LEN: usize = 128;
 
-/// A fixed-ratio FFT resampler (rubato) fed with blocks of any size. Input is collected
+/// A windowed-sinc resampler (rubato) fed with blocks of any size. Input is collected
 /// into fixed chunks, so the output is the same whatever the block sizes; the resampler's
 /// own delay is removed, so output sample `n` is at time `n / output_rate`.
 pub struct StreamResampler {
-    inner: Fft<f32>,
+    inner: Async<f32>,
     from: u32,
     to: u32,
     chunk: Vec<f32>,
@@ -243,12 +249,15 @@ pub struct StreamResampler {
 
 impl StreamResampler {
     pub fn new(from: u32, to: u32) -> Result<Self, AudioError> {
-        let inner = Fft::<f32>::new(
-            from as usize,
-            to as usize,
+        let parameters =
+            SincInterpolationParameters::new(RESAMPLER_SINC_LEN, WindowFunction::BlackmanHarris2);
+        let inner = Async::<f32>::new_sinc(
+            f64::from(to) / f64::from(from),
+            1.0,
+            &parameters,
             RESAMPLER_CHUNK,
             1,
-            FixedSync::Input,
+            FixedAsync::Input,
         )
         .map_err(|e| AudioError::Resample {
             from,
