@@ -231,6 +231,19 @@ impl Detector {
     }
 }
 
+/// At the end of a stream of `end_s` seconds (matchers pad it with silence to take
+/// their last decisions): drops events that begin in the padding, and clamps ends and
+/// decision times to the stream's end.
+fn keep_within(events: &mut Vec<Event>, end_s: f64) {
+    events.retain_mut(|e| {
+        if let Some(end) = e.end.as_mut() {
+            *end = end.min(end_s);
+        }
+        e.emitted_at = e.emitted_at.min(end_s);
+        e.time < end_s
+    });
+}
+
 fn stamp(events: &mut [Event], emitted_at: f64) {
     for e in events {
         e.emitted_at = emitted_at;

@@ -437,13 +437,7 @@ impl SpectralMatcher {
         }
         self.finished = true;
         let end_s = end as f64 / self.rate;
-        out.retain_mut(|e| {
-            if let Some(e_end) = e.end.as_mut() {
-                *e_end = e_end.min(end_s);
-            }
-            e.emitted_at = e.emitted_at.min(end_s);
-            e.time < end_s
-        });
+        super::keep_within(out, end_s);
     }
 
     fn compute_frame(&mut self, out: &mut Vec<Event>) {

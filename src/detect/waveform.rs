@@ -372,12 +372,7 @@ impl WaveformMatcher {
         }
         self.finished = true;
         let end_s = end as f64 / self.rate;
-        out.retain_mut(|e| {
-            if let Some(e_end) = e.end.as_mut() {
-                *e_end = e_end.min(end_s);
-            }
-            e.time < end_s
-        });
+        super::keep_within(out, end_s);
         if let Some(traces) = &mut self.trace {
             for t in traces {
                 t.scores.truncate(end as usize);
