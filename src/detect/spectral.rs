@@ -546,7 +546,8 @@ impl SpectralMatcher {
         let wanted = (loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0)).max(floor.min(loudest / 16.0));
         let mut s = lo;
         while s + block <= hi {
-            if energy(s) >= wanted && energy(s) > 0.0 {
+            let e = energy(s);
+            if e >= wanted && e > 0.0 {
                 return s;
             }
             s += block;
