@@ -11,9 +11,7 @@ use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use rubato::audioadapter_buffers::direct::InterleavedSlice;
-use rubato::{
-    Async, FixedAsync, Indexing, Resampler, SincInterpolationParameters, WindowFunction,
-};
+use rubato::{Async, FixedAsync, Indexing, Resampler, SincInterpolationParameters, WindowFunction};
 
 /// Which channel of a multi-channel file becomes the mono signal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
