@@ -185,3 +185,32 @@ fn the_eval_command_scores_the_bundled_example() {
     }
     assert!(v["latency_median"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn the_eval_command_names_a_bad_annotation_or_tolerance() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["eval", "examples/beat.wav", "-c", "config/onomato.toml"];
+        args.extend_from_slice(extra);
+        Command::new(env!("CARGO_BIN_EXE_onomato"))
+            .args(&args)
+            .current_dir(root)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--truth", "examples/none.csv"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot read annotation 'examples/none.csv'"),
+        "{err}"
+    );
+    let out = run(&["--truth", "examples/beat.truth.csv", "--tolerance", "0"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--tolerance must be a positive number of seconds, found 0"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
