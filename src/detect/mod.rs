@@ -193,9 +193,7 @@ impl Detector {
         match resampler {
             None => matcher.push(block, out),
             Some(r) => r.push(block, &mut |piece, consumed| {
-                let start = out.len();
-                matcher.push(piece, out);
-                stamp(&mut out[start..], consumed as f64 / input_rate);
+                push_resampled(matcher, out, piece, consumed as f64 / input_rate)
             }),
         }
         self.number(&mut out[first..]);
@@ -210,9 +208,7 @@ impl Detector {
         } = self;
         if let Some(r) = resampler {
             r.finish(&mut |piece, consumed| {
-                let start = out.len();
-                matcher.push(piece, out);
-                stamp(&mut out[start..], consumed as f64 / input_rate);
+                push_resampled(matcher, out, piece, consumed as f64 / input_rate)
             });
         }
         let start = out.len();
@@ -242,6 +238,14 @@ fn keep_within(events: &mut Vec<Event>, end_s: f64) {
         e.emitted_at = e.emitted_at.min(end_s);
         e.time < end_s
     });
+}
+
+/// Feeds a piece the resampler released: whatever the matcher decides on it was
+/// decided when the input that completed the piece arrived (`emitted_at`, seconds).
+fn push_resampled(matcher: &mut Matcher, out: &mut Vec<Event>, piece: &[f32], emitted_at: f64) {
+    let start = out.len();
+    matcher.push(piece, out);
+    stamp(&mut out[start..], emitted_at);
 }
 
 fn stamp(events: &mut [Event], emitted_at: f64) {
