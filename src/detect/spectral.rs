@@ -304,6 +304,8 @@ pub struct SpectralMatcher {
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
+    /// Correlation per lag, for pitch estimation (lags `min - 1 ..= max + 1`).
+    pitch_correlations: Vec<f64>,
     finished: bool,
 }
 
@@ -377,6 +379,12 @@ impl SpectralMatcher {
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
+            pitch_correlations: vec![
+                0.0;
+                ((rate / PITCH_MIN_HZ).ceil() - (rate / PITCH_MAX_HZ).floor())
+                    as usize
+                    + 3
+            ],
             analyzer,
             finished: false,
         }
@@ -734,7 +742,7 @@ impl SpectralMatcher {
     /// normalised autocorrelation: the shortest lag whose correlation is within 10% of
     /// the best. `None` when the best correlation is below `VOICED_CORRELATION`
     /// (unvoiced, noisy) or the span is too short. Reads the sample ring in place.
-    fn estimate_pitch(&self, lo: u64, hi: u64) -> Option<f64> {
+    fn estimate_pitch(&mut self, lo: u64, hi: u64) -> Option<f64> {
         let min_lag = (self.rate / PITCH_MAX_HZ).floor() as u64;
         let max_lag = (self.rate / PITCH_MIN_HZ).ceil() as u64;
         let span = hi.saturating_sub(lo);
@@ -743,7 +751,10 @@ impl SpectralMatcher {
             return None;
         }
         let start = lo + (span - len - max_lag) / 2;
-        let corr = |lag: u64| {
+        // Every lag's correlation once, into the buffer made in `new` (taking it out of
+        // `self` and back does not allocate).
+        let mut by_lag = std::mem::take(&mut self.pitch_correlations);
+        let correlation = |lag: u64| {
             let (mut xy, mut xx, mut yy) = (0.0f64, 0.0f64, 0.0f64);
             for n in start..start + len {
                 let (x, y) = (f64::from(self.sample(n)), f64::from(self.sample(n + lag)));
@@ -757,27 +768,41 @@ impl SpectralMatcher {
                 0.0
             }
         };
-        let best = (min_lag..=max_lag)
-            .map(corr)
-            .fold(f64::NEG_INFINITY, f64::max);
-        if best < VOICED_CORRELATION {
-            return None;
+        for (slot, lag) in by_lag.iter_mut().zip(min_lag - 1..=max_lag + 1) {
+            *slot = correlation(lag);
         }
-        let lag = (min_lag..=max_lag).find(|&l| corr(l) >= 0.9 * best)?;
-        // Walk up to the local peak, then refine it with a parabola through 3 points.
-        let mut lag = lag;
-        while lag < max_lag && corr(lag + 1) > corr(lag) {
-            lag += 1;
-        }
-        let (a, b, c) = (corr(lag - 1), corr(lag), corr(lag + 1));
-        let denom = a - 2.0 * b + c;
-        let shift = if denom.abs() > 1e-12 {
-            0.5 * (a - c) / denom
-        } else {
-            0.0
-        };
-        Some(self.rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
+        let result = pitch_from_correlations(&by_lag, min_lag, self.rate);
+        self.pitch_correlations = by_lag;
+        result
     }
+}
+
+/// Pitch from the correlations of lags `min_lag - 1 ..= max_lag + 1` (`by_lag[0]` is
+/// lag `min_lag - 1`): the shortest lag within 10% of the best, walked up to its local
+/// peak and refined with a parabola through 3 points.
+fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f64> {
+    let corr = |lag: u64| by_lag[(lag + 1 - min_lag) as usize];
+    let max_lag = min_lag + by_lag.len() as u64 - 3;
+    let best = (min_lag..=max_lag)
+        .map(corr)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if best < VOICED_CORRELATION {
+        return None;
+    }
+    let lag = (min_lag..=max_lag).find(|&l| corr(l) >= 0.9 * best)?;
+    // Walk up to the local peak, then refine it with a parabola through 3 points.
+    let mut lag = lag;
+    while lag < max_lag && corr(lag + 1) > corr(lag) {
+        lag += 1;
+    }
+    let (a, b, c) = (corr(lag - 1), corr(lag), corr(lag + 1));
+    let denom = a - 2.0 * b + c;
+    let shift = if denom.abs() > 1e-12 {
+        0.5 * (a - c) / denom
+    } else {
+        0.0
+    };
+    Some(rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
 }
 
 /// Features of one take: runs the same analysis over the take (after a little silence),
