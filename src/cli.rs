@@ -12,8 +12,10 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::analyze;
-use crate::config::{self, Config, Method};
+use crate::config::{self, Config, Method, MidiPortChoice, MidiSettings, OscSettings};
+use crate::daemon::{self, ListenOptions};
 use crate::eval;
+use crate::output::PrintMode;
 use crate::pattern;
 
 /// Turns short vocal sounds ("tick", "pop", "chhh") into timed events for animation and
@@ -36,6 +38,99 @@ pub enum Command {
     Check(PatternSource),
     /// Analyse a recording and score the events against an annotation CSV.
     Eval(EvalArgs),
+    /// The daemon: listen to the microphone (or replay a file) and send each detected
+    /// sound as OSC and MIDI as it happens. SIGHUP reloads the config, SIGTERM stops.
+    Listen(ListenArgs),
+    /// List audio inputs and MIDI output ports.
+    Devices,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LogFormat {
+    Human,
+    Json,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PrintChoice {
+    /// Text when stdout is a terminal, nothing otherwise.
+    Auto,
+    Text,
+    Json,
+    None,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ListenArgs {
+    #[command(flatten)]
+    pub source: PatternSource,
+    /// Replay this WAV file in real time instead of capturing the microphone.
+    #[arg(long, value_name = "FILE.wav")]
+    pub input: Option<PathBuf>,
+    /// Replay speed: 1 is real time, 10 ten times faster (with --input).
+    #[arg(long, default_value_t = 1.0, requires = "input")]
+    pub speed: f64,
+    /// Replay the file this many times (with --input).
+    #[arg(long, default_value_t = 1, requires = "input")]
+    pub repeat: u32,
+    /// Audio input device: its name or part of it (overrides the config).
+    #[arg(long, value_name = "NAME")]
+    pub device: Option<String>,
+    /// Send OSC to HOST:PORT (repeatable; adds to the config's targets).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub osc: Vec<String>,
+    /// Send MIDI to the first output port whose name contains PORT (overrides the config).
+    #[arg(long, value_name = "PORT", conflicts_with = "midi_virtual")]
+    pub midi: Option<String>,
+    /// Send MIDI through a virtual port of this name (overrides the config).
+    #[arg(long, value_name = "NAME")]
+    pub midi_virtual: Option<String>,
+    /// Run the live bounce solver (with the config's [bounce] settings, or defaults).
+    #[arg(long)]
+    pub bounce: bool,
+    /// How each event is printed on stdout as it is sent.
+    #[arg(long, value_enum, default_value_t = PrintChoice::Auto)]
+    pub print: PrintChoice,
+    /// Log format on stderr.
+    #[arg(long, value_enum, default_value_t = LogFormat::Human)]
+    pub log_format: LogFormat,
+}
+
+impl ListenArgs {
+    /// The validated configuration: the file and patterns, then the overrides.
+    pub fn to_config(&self) -> anyhow::Result<Config> {
+        let mut config = self.source.to_config()?;
+        if let Some(d) = &self.device {
+            if d.trim().is_empty() {
+                anyhow::bail!("--device is empty; give a device name (see `onomato devices`)");
+            }
+            config.input.device = Some(d.clone());
+        }
+        if !self.osc.is_empty() {
+            for t in &self.osc {
+                config::check_osc_target(t).map_err(|m| anyhow::anyhow!("--osc: {m}"))?;
+            }
+            match config.osc.as_mut() {
+                Some(o) => o.targets.extend(self.osc.iter().cloned()),
+                None => config.osc = Some(OscSettings::with_targets(self.osc.clone())),
+            }
+        }
+        let port = match (&self.midi, &self.midi_virtual) {
+            (Some(p), _) => Some(MidiPortChoice::Connect(p.clone())),
+            (None, Some(v)) => Some(MidiPortChoice::Virtual(v.clone())),
+            (None, None) => None,
+        };
+        if let Some(port) = port {
+            match config.midi.as_mut() {
+                Some(m) => m.port = port,
+                None => config.midi = Some(MidiSettings::with_port(port)),
+            }
+        }
+        if self.bounce && config.bounce.is_none() {
+            config.bounce = Some(config.bounce_or_default());
+        }
+        Ok(config)
+    }
 }
 
 /// Where the patterns come from: a config file, `--pattern` arguments, or both.
@@ -206,28 +301,97 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn init_logging(verbose: u8) {
+fn run_listen(args: &ListenArgs) -> anyhow::Result<()> {
+    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
+        anyhow::bail!(
+            "--speed must be above 0 and at most 1000, found {}",
+            args.speed
+        );
+    }
+    if args.repeat == 0 {
+        anyhow::bail!("--repeat must be at least 1, found 0");
+    }
+    let print = match args.print {
+        PrintChoice::Auto => {
+            use std::io::IsTerminal;
+            if std::io::stdout().is_terminal() {
+                PrintMode::Text
+            } else {
+                PrintMode::None
+            }
+        }
+        PrintChoice::Text => PrintMode::Text,
+        PrintChoice::Json => PrintMode::Json,
+        PrintChoice::None => PrintMode::None,
+    };
+    let options = ListenOptions {
+        input_file: args.input.clone(),
+        speed: args.speed,
+        repeat: args.repeat,
+        print,
+    };
+    daemon::listen(&|| args.to_config(), &options)?;
+    Ok(())
+}
+
+fn run_devices() -> anyhow::Result<()> {
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    writeln!(out, "audio inputs:")?;
+    match daemon::capture::list_inputs() {
+        Ok(inputs) if inputs.is_empty() => writeln!(out, "  (none)")?,
+        Ok(inputs) => {
+            for i in inputs {
+                writeln!(out, "  {i}")?;
+            }
+        }
+        Err(e) => writeln!(out, "  (cannot list: {e})")?,
+    }
+    writeln!(out, "MIDI output ports:")?;
+    match crate::output::midi::list_ports() {
+        Ok(ports) if ports.is_empty() => writeln!(out, "  (none)")?,
+        Ok(ports) => {
+            for p in ports {
+                writeln!(out, "  {p}")?;
+            }
+        }
+        Err(e) => writeln!(out, "  (cannot list: {e})")?,
+    }
+    out.flush().context("cannot write to stdout")
+}
+
+fn init_logging(verbose: u8, format: LogFormat, daemon: bool) {
     use tracing_subscriber::EnvFilter;
-    let default = match verbose {
-        0 => "warn",
-        1 => "info",
+    let default = match (verbose, daemon) {
+        (0, false) => "warn",
+        (0, true) | (1, _) => "info",
         _ => "debug",
     };
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
-    let _ = tracing_subscriber::fmt()
+    use std::io::IsTerminal;
+    let builder = tracing_subscriber::fmt()
         .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .try_init();
+        .with_ansi(std::io::stderr().is_terminal())
+        .with_writer(std::io::stderr);
+    let _ = match format {
+        LogFormat::Human => builder.try_init(),
+        LogFormat::Json => builder.json().try_init(),
+    };
 }
 
 /// Entry point of the binary: parses arguments, runs the command, prints errors.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    init_logging(cli.verbose);
+    match &cli.command {
+        Command::Listen(args) => init_logging(cli.verbose, args.log_format, true),
+        _ => init_logging(cli.verbose, LogFormat::Human, false),
+    }
     let result = match &cli.command {
         Command::Analyze(args) => run_analyze(args),
         Command::Check(source) => run_check(source),
         Command::Eval(args) => run_eval(args),
+        Command::Listen(args) => run_listen(args),
+        Command::Devices => run_devices(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -75,6 +75,44 @@ struct RawConfig {
     #[serde(default)]
     pattern: Vec<RawPattern>,
     bounce: Option<RawBounce>,
+    #[serde(default)]
+    input: RawInput,
+    osc: Option<RawOsc>,
+    midi: Option<RawMidi>,
+}
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawInput {
+    device: Option<String>,
+    sample_rate: Option<u32>,
+    buffer_frames: Option<u32>,
+    ring_seconds: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawOsc {
+    #[serde(default)]
+    targets: Vec<String>,
+    prefix: Option<String>,
+    bundle: Option<bool>,
+    heartbeat_seconds: Option<f64>,
+    bounce_state_rate: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMidi {
+    connect: Option<String>,
+    virtual_port: Option<String>,
+    channel: Option<u8>,
+    gate_seconds: Option<f64>,
+    velocity_min: Option<u8>,
+    velocity_max: Option<u8>,
+    full_strength: Option<f64>,
+    velocity_curve: Option<f64>,
+    strength_cc: Option<u8>,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -99,12 +137,16 @@ struct RawPattern {
     takes: Vec<PathBuf>,
     threshold: Option<f64>,
     continuous_threshold: Option<f64>,
+    note: Option<u8>,
+    channel: Option<u8>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawBounce {
     gravity: Option<f64>,
+    default_interval_seconds: Option<f64>,
+    state_delay_seconds: Option<f64>,
     #[serde(default)]
     hard: Vec<String>,
     #[serde(default)]
@@ -154,13 +196,126 @@ impl Default for DetectorSettings {
 }
 
 /// One pattern as configured (its takes not yet loaded).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct PatternSpec {
     pub name: String,
     pub kind: PatternKind,
     pub takes: Vec<PathBuf>,
     pub threshold: Option<f64>,
     pub continuous_threshold: Option<f64>,
+    /// MIDI note (0-127); `None`: 36 plus the pattern's position.
+    pub note: Option<u8>,
+    /// MIDI channel (1-16); `None`: the `[midi]` channel.
+    pub midi_channel: Option<u8>,
+}
+
+/// Audio capture settings of `listen`, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputSettings {
+    /// Input device: its name or a part of it; `None`: the system's default input.
+    pub device: Option<String>,
+    /// Capture rate, Hz; `None`: the device's default rate.
+    pub sample_rate: Option<u32>,
+    /// Frames per capture callback (the device's buffer size).
+    pub buffer_frames: u32,
+    /// Length of the ring between the capture callback and the detector, seconds.
+    pub ring_seconds: f64,
+}
+
+impl Default for InputSettings {
+    fn default() -> Self {
+        Self {
+            device: None,
+            sample_rate: None,
+            buffer_frames: 256,
+            ring_seconds: 2.0,
+        }
+    }
+}
+
+/// OSC output, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OscSettings {
+    /// UDP targets as `HOST:PORT`; resolved when the daemon starts.
+    pub targets: Vec<String>,
+    /// Address prefix, such as `/onomato`: starts with '/', does not end with one.
+    pub prefix: String,
+    /// Wrap each message in a bundle whose timetag is the sound's onset.
+    pub bundle: bool,
+    /// Period of the `/status` message, seconds; `None`: no status.
+    pub heartbeat_seconds: Option<f64>,
+    /// Rate of `/bounce/state` messages, Hz; `None`: hits only.
+    pub bounce_state_rate: Option<f64>,
+}
+
+impl OscSettings {
+    pub fn with_targets(targets: Vec<String>) -> Self {
+        Self {
+            targets,
+            prefix: DEFAULT_OSC_PREFIX.to_string(),
+            bundle: false,
+            heartbeat_seconds: None,
+            bounce_state_rate: None,
+        }
+    }
+}
+
+pub const DEFAULT_OSC_PREFIX: &str = "/onomato";
+
+/// Where MIDI goes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MidiPortChoice {
+    /// Connect to the first output port whose name contains this text.
+    Connect(String),
+    /// Open a virtual port of this name, for other programs to connect to.
+    Virtual(String),
+}
+
+/// MIDI output, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MidiSettings {
+    pub port: MidiPortChoice,
+    /// Channel (1-16) of patterns that do not set their own.
+    pub channel: u8,
+    /// How long an impulse's note is held, seconds.
+    pub gate_seconds: f64,
+    pub velocity_min: u8,
+    pub velocity_max: u8,
+    /// Strength that gives `velocity_max`.
+    pub full_strength: f64,
+    /// Exponent of the strength-to-velocity curve (1: linear).
+    pub velocity_curve: f64,
+    /// Control change number that carries a continuous sound's strength.
+    pub strength_cc: Option<u8>,
+}
+
+impl MidiSettings {
+    pub fn with_port(port: MidiPortChoice) -> Self {
+        Self {
+            port,
+            channel: 10,
+            gate_seconds: 0.05,
+            velocity_min: 1,
+            velocity_max: 127,
+            full_strength: 1.5,
+            velocity_curve: 1.0,
+            strength_cc: None,
+        }
+    }
+
+    /// Velocity (1-127) of a sound of this strength.
+    pub fn velocity(&self, strength: f64) -> u8 {
+        let x = if strength.is_finite() {
+            (strength / self.full_strength).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let lo = f64::from(self.velocity_min);
+        let hi = f64::from(self.velocity_max);
+        (lo + (hi - lo) * x.powf(self.velocity_curve))
+            .round()
+            .clamp(1.0, 127.0) as u8
+    }
 }
 
 /// Bounce solver settings, validated.
@@ -172,6 +327,11 @@ pub struct BounceSettings {
     pub styles: BTreeMap<String, ContactStyle>,
     /// Squash of a soft bounce at strength 1 (fraction of the ball's height).
     pub max_squash: f64,
+    /// Live solver: the interval predicted before two hits have been seen, seconds.
+    pub default_interval_seconds: f64,
+    /// Live solver: how far the state stream runs behind the input, so that it knows
+    /// each hit before drawing it, seconds.
+    pub state_delay_seconds: f64,
 }
 
 impl BounceSettings {
@@ -191,12 +351,16 @@ impl BounceSettings {
             gravity: DEFAULT_GRAVITY,
             styles,
             max_squash: DEFAULT_MAX_SQUASH,
+            default_interval_seconds: DEFAULT_INTERVAL_SECONDS,
+            state_delay_seconds: DEFAULT_STATE_DELAY_SECONDS,
         }
     }
 }
 
 pub const DEFAULT_GRAVITY: f64 = 9.81;
 pub const DEFAULT_MAX_SQUASH: f64 = 0.4;
+pub const DEFAULT_INTERVAL_SECONDS: f64 = 0.5;
+pub const DEFAULT_STATE_DELAY_SECONDS: f64 = 0.05;
 
 /// A validated configuration.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -205,6 +369,11 @@ pub struct Config {
     pub patterns: Vec<PatternSpec>,
     /// `None` when the file has no `[bounce]` section.
     pub bounce: Option<BounceSettings>,
+    pub input: InputSettings,
+    /// `None`: no OSC.
+    pub osc: Option<OscSettings>,
+    /// `None`: no MIDI.
+    pub midi: Option<MidiSettings>,
 }
 
 impl Config {
@@ -364,7 +533,15 @@ impl RawConfig {
                 takes: p.takes.into_iter().map(|t| base.join(t)).collect(),
                 threshold: p.threshold,
                 continuous_threshold: p.continuous_threshold,
+                note: p.note,
+                midi_channel: p.channel,
             };
+            if let Some(n) = spec.note {
+                check_note(&item, "note", n)?;
+            }
+            if let Some(c) = spec.midi_channel {
+                check_channel(&item, c)?;
+            }
             check_thresholds(&item, &spec, &detector)?;
             patterns.push(spec);
         }
@@ -373,11 +550,232 @@ impl RawConfig {
             None => None,
             Some(b) => Some(b.validate(&patterns, &format!("{origin}, [bounce]"))?),
         };
+        let input = self.input.validate(&format!("{origin}, [input]"))?;
+        let osc = match self.osc {
+            None => None,
+            Some(o) => Some(o.validate(&format!("{origin}, [osc]"))?),
+        };
+        let midi = match self.midi {
+            None => None,
+            Some(m) => Some(m.validate(&format!("{origin}, [midi]"))?),
+        };
         Ok(Config {
             detector,
             patterns,
             bounce,
+            input,
+            osc,
+            midi,
         })
+    }
+}
+
+fn check_note(item: &str, key: &str, value: u8) -> Result<(), ConfigError> {
+    if value <= 127 {
+        Ok(())
+    } else {
+        Err(invalid(
+            item,
+            format!("{key} must be a MIDI number from 0 to 127, found {value}"),
+        ))
+    }
+}
+
+fn check_channel(item: &str, channel: u8) -> Result<(), ConfigError> {
+    if (1..=16).contains(&channel) {
+        Ok(())
+    } else {
+        Err(invalid(
+            item,
+            format!("channel must be a MIDI channel from 1 to 16, found {channel}"),
+        ))
+    }
+}
+
+fn check_seconds(item: &str, key: &str, value: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(invalid(
+            item,
+            format!("{key} must be between {lo} and {hi} seconds, found {value}"),
+        ))
+    }
+}
+
+/// Checks `HOST:PORT` (the host is resolved later, when the daemon starts).
+pub fn check_osc_target(target: &str) -> Result<(), String> {
+    let Some((host, port)) = target.rsplit_once(':') else {
+        return Err(format!(
+            "expected HOST:PORT such as 127.0.0.1:9000, found '{target}'"
+        ));
+    };
+    if host.is_empty() || host.contains(char::is_whitespace) {
+        return Err(format!(
+            "expected a host name or address before ':', found '{target}'"
+        ));
+    }
+    match port.parse::<u16>() {
+        Ok(p) if p > 0 => Ok(()),
+        _ => Err(format!(
+            "expected a UDP port from 1 to 65535 after ':', found '{port}' in '{target}'"
+        )),
+    }
+}
+
+/// An OSC address prefix: '/' then parts without OSC's special characters.
+fn check_osc_prefix(prefix: &str) -> Result<(), String> {
+    let ok = prefix.starts_with('/')
+        && !prefix.ends_with('/')
+        && !prefix.contains("//")
+        && prefix
+            .chars()
+            .all(|c| c.is_ascii_graphic() && !"#*,?[]{}".contains(c));
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "prefix must start with '/', not end with '/', and hold no spaces or any of #*,?[]{{}}, found '{prefix}'"
+        ))
+    }
+}
+
+impl RawInput {
+    fn validate(self, item: &str) -> Result<InputSettings, ConfigError> {
+        let d = InputSettings::default();
+        if let Some(name) = &self.device {
+            if name.trim().is_empty() {
+                return Err(invalid(
+                    item,
+                    "device is empty; give a device name (see `onomato devices`) or leave it out for the default input".into(),
+                ));
+            }
+        }
+        if let Some(rate) = self.sample_rate {
+            if !(8_000..=192_000).contains(&rate) {
+                return Err(invalid(
+                    item,
+                    format!("sample_rate must be between 8000 and 192000 Hz, found {rate}"),
+                ));
+            }
+        }
+        let buffer_frames = self.buffer_frames.unwrap_or(d.buffer_frames);
+        if !(16..=8192).contains(&buffer_frames) {
+            return Err(invalid(
+                item,
+                format!("buffer_frames must be between 16 and 8192, found {buffer_frames}"),
+            ));
+        }
+        let ring_seconds = self.ring_seconds.unwrap_or(d.ring_seconds);
+        check_seconds(item, "ring_seconds", ring_seconds, 0.1, 30.0)?;
+        Ok(InputSettings {
+            device: self.device,
+            sample_rate: self.sample_rate,
+            buffer_frames,
+            ring_seconds,
+        })
+    }
+}
+
+impl RawOsc {
+    fn validate(self, item: &str) -> Result<OscSettings, ConfigError> {
+        for t in &self.targets {
+            check_osc_target(t).map_err(|m| invalid(item, format!("targets: {m}")))?;
+        }
+        let prefix = self
+            .prefix
+            .unwrap_or_else(|| DEFAULT_OSC_PREFIX.to_string());
+        check_osc_prefix(&prefix).map_err(|m| invalid(item, m))?;
+        if let Some(h) = self.heartbeat_seconds {
+            check_seconds(item, "heartbeat_seconds", h, 0.1, 3600.0)?;
+        }
+        if let Some(r) = self.bounce_state_rate {
+            if !(r.is_finite() && (1.0..=1000.0).contains(&r)) {
+                return Err(invalid(
+                    item,
+                    format!("bounce_state_rate must be between 1 and 1000 Hz, found {r}"),
+                ));
+            }
+        }
+        Ok(OscSettings {
+            targets: self.targets,
+            prefix,
+            bundle: self.bundle.unwrap_or(false),
+            heartbeat_seconds: self.heartbeat_seconds,
+            bounce_state_rate: self.bounce_state_rate,
+        })
+    }
+}
+
+impl RawMidi {
+    fn validate(self, item: &str) -> Result<MidiSettings, ConfigError> {
+        let port =
+            match (self.connect, self.virtual_port) {
+                (Some(_), Some(_)) => return Err(invalid(
+                    item,
+                    "give connect (an existing port) or virtual_port (a port of our own), not both"
+                        .into(),
+                )),
+                (Some(c), None) if !c.trim().is_empty() => MidiPortChoice::Connect(c),
+                (None, Some(v)) if !v.trim().is_empty() => MidiPortChoice::Virtual(v),
+                (None, None) => MidiPortChoice::Virtual("onomato".into()),
+                _ => return Err(invalid(item, "the MIDI port name is empty".into())),
+            };
+        let mut m = MidiSettings::with_port(port);
+        if let Some(c) = self.channel {
+            check_channel(item, c)?;
+            m.channel = c;
+        }
+        if let Some(g) = self.gate_seconds {
+            check_seconds(item, "gate_seconds", g, 0.001, 10.0)?;
+            m.gate_seconds = g;
+        }
+        for (key, value, slot) in [
+            ("velocity_min", self.velocity_min, &mut m.velocity_min),
+            ("velocity_max", self.velocity_max, &mut m.velocity_max),
+        ] {
+            if let Some(v) = value {
+                if !(1..=127).contains(&v) {
+                    return Err(invalid(
+                        item,
+                        format!("{key} must be from 1 to 127, found {v}"),
+                    ));
+                }
+                *slot = v;
+            }
+        }
+        if m.velocity_min > m.velocity_max {
+            return Err(invalid(
+                item,
+                format!(
+                    "velocity_min ({}) must not be above velocity_max ({})",
+                    m.velocity_min, m.velocity_max
+                ),
+            ));
+        }
+        if let Some(f) = self.full_strength {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(invalid(
+                    item,
+                    format!("full_strength must be a positive number, found {f}"),
+                ));
+            }
+            m.full_strength = f;
+        }
+        if let Some(c) = self.velocity_curve {
+            if !(c.is_finite() && (0.1..=10.0).contains(&c)) {
+                return Err(invalid(
+                    item,
+                    format!("velocity_curve must be between 0.1 and 10, found {c}"),
+                ));
+            }
+            m.velocity_curve = c;
+        }
+        if let Some(cc) = self.strength_cc {
+            check_note(item, "strength_cc", cc)?;
+            m.strength_cc = Some(cc);
+        }
+        Ok(m)
     }
 }
 
@@ -459,6 +857,20 @@ impl RawBounce {
                 format!("max_squash must be at least 0 and below 1, found {max_squash}"),
             ));
         }
+        let default_interval_seconds = self
+            .default_interval_seconds
+            .unwrap_or(DEFAULT_INTERVAL_SECONDS);
+        check_seconds(
+            item,
+            "default_interval_seconds",
+            default_interval_seconds,
+            0.05,
+            10.0,
+        )?;
+        let state_delay_seconds = self
+            .state_delay_seconds
+            .unwrap_or(DEFAULT_STATE_DELAY_SECONDS);
+        check_seconds(item, "state_delay_seconds", state_delay_seconds, 0.0, 2.0)?;
         let mut styles = BTreeMap::new();
         for (key, names, style, kind) in [
             ("hard", self.hard, ContactStyle::Hard, PatternKind::Impulse),
@@ -499,6 +911,8 @@ impl RawBounce {
             gravity,
             styles,
             max_squash,
+            default_interval_seconds,
+            state_delay_seconds,
         })
     }
 }
@@ -541,8 +955,7 @@ pub fn parse_pattern_args(args: &[String]) -> Result<Vec<PatternSpec>, ConfigErr
                 name: name.to_string(),
                 kind,
                 takes: vec![PathBuf::from(file)],
-                threshold: None,
-                continuous_threshold: None,
+                ..PatternSpec::default()
             }),
         }
     }

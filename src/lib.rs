@@ -11,8 +11,11 @@ pub mod analyze;
 pub mod audio;
 pub mod cli;
 pub mod config;
+pub mod daemon;
 pub mod detect;
 pub mod eval;
+pub mod live_bounce;
+pub mod output;
 pub mod pattern;
 pub mod solver;
 

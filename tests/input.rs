@@ -33,8 +33,7 @@ fn config_for(dir: &Path, tick: &[f32], pop: &[f32]) -> Config {
         name: name.into(),
         kind: PatternKind::Impulse,
         takes: vec![path],
-        threshold: None,
-        continuous_threshold: None,
+        ..PatternSpec::default()
     };
     Config {
         patterns: vec![spec("tick", tick_path), spec("pop", pop_path)],
@@ -128,8 +127,7 @@ fn load_error(dir: &Path, file: &str, settings: &DetectorSettings) -> String {
         name: "tick".into(),
         kind: PatternKind::Impulse,
         takes: vec![dir.join(file)],
-        threshold: None,
-        continuous_threshold: None,
+        ..PatternSpec::default()
     };
     match Pattern::load(&spec, settings) {
         Ok(_) => panic!("{file} was accepted"),

@@ -48,14 +48,16 @@ impl Matcher {
 /// the daemon and read by tools. Times are seconds from the start of the stream.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Event {
-    /// Sequence number in the order of decision, from 0.
+    /// Sequence number in the order of recognition, from 0. A continuous event keeps
+    /// the number it was given at its begin.
     pub id: u64,
     pub pattern: Arc<str>,
     pub kind: PatternKind,
     /// Onset of the instance.
     #[serde(serialize_with = "seconds")]
     pub time: f64,
-    /// End of a continuous instance.
+    /// End of a continuous instance. A continuous event without an end is a begin
+    /// marker: the sound was recognised and goes on (see [`Detector::report_begins`]).
     #[serde(
         skip_serializing_if = "Option::is_none",
         serialize_with = "opt_seconds"
@@ -121,6 +123,13 @@ pub struct Detector {
     matcher: Matcher,
     next_id: u64,
     input_consumed: u64,
+    /// Keep begin markers of continuous events in the output.
+    report_begins: bool,
+    /// Stream time at which this detector started (a reload continues the stream).
+    time_offset: f64,
+    /// Per pattern name: the id of its continuous event that has begun and not ended.
+    /// Made with one slot per pattern, so updating it does not allocate.
+    open_ids: Vec<(Arc<str>, Option<u64>)>,
 }
 
 impl Detector {
@@ -137,6 +146,7 @@ impl Detector {
         if !(1_000..=768_000).contains(&input_rate) {
             return Err(DetectError::InputRate(input_rate));
         }
+        let open_ids = patterns.iter().map(|p| (p.name.clone(), None)).collect();
         let matcher = match settings.method {
             Method::Waveform => Matcher::Waveform(WaveformMatcher::new(patterns, settings)),
             Method::Spectral => Matcher::Spectral(SpectralMatcher::new(patterns, settings)),
@@ -152,7 +162,19 @@ impl Detector {
             matcher,
             next_id: 0,
             input_consumed: 0,
+            report_begins: false,
+            time_offset: 0.0,
+            open_ids,
         })
+    }
+
+    /// Also reports the begin of a continuous event as soon as it is recognised: an
+    /// [`Event`] of kind continuous with no `end`, followed later by the complete event
+    /// with the same id. The daemon uses it to send `/begin` at once; `analyze` does
+    /// not. (The spectral method recognises held sounds at their start; the waveform
+    /// method only when they end, so its begin and end come together.)
+    pub fn report_begins(&mut self, report: bool) {
+        self.report_begins = report;
     }
 
     /// Input sample rate this detector was built for.
@@ -162,7 +184,14 @@ impl Detector {
 
     /// Stream time consumed so far, in seconds.
     pub fn stream_seconds(&self) -> f64 {
-        self.input_consumed as f64 / f64::from(self.input_rate)
+        self.time_offset + self.input_consumed as f64 / f64::from(self.input_rate)
+    }
+
+    /// Makes this detector continue the stream of `previous` (a reload): its events'
+    /// times follow on from where `previous` stopped, and their ids too.
+    pub fn continue_after(&mut self, previous: &Detector) {
+        self.time_offset = previous.stream_seconds();
+        self.next_id = previous.next_id;
     }
 
     /// Keeps every match-score value (per pattern take) from now on, for plots and tests.
@@ -196,7 +225,7 @@ impl Detector {
                 push_resampled(matcher, out, piece, consumed as f64 / input_rate)
             }),
         }
-        self.number(&mut out[first..]);
+        self.number(out, first);
     }
 
     /// Ends the stream: flushes what is buffered and decides every pending instance.
@@ -216,14 +245,51 @@ impl Detector {
         if self.resampler.is_some() {
             stamp(&mut out[start..], self.input_consumed as f64 / input_rate);
         }
-        self.number(&mut out[first..]);
+        self.number(out, first);
     }
 
-    fn number(&mut self, events: &mut [Event]) {
-        for e in events {
-            e.id = self.next_id;
-            self.next_id += 1;
+    /// Numbers the events appended from `first` on, and drops begin markers unless
+    /// they were asked for (in place: no allocation).
+    fn number(&mut self, out: &mut Vec<Event>, first: usize) {
+        let mut kept = first;
+        for i in first..out.len() {
+            let e = &mut out[i];
+            let slot = (e.kind == PatternKind::Continuous)
+                .then(|| self.open_ids.iter_mut().find(|(n, _)| **n == *e.pattern))
+                .flatten();
+            let begin_marker = e.kind == PatternKind::Continuous && e.end.is_none();
+            e.id = match (slot, begin_marker) {
+                (Some((_, open)), true) => {
+                    let id = self.next_id;
+                    self.next_id += 1;
+                    *open = Some(id);
+                    id
+                }
+                (Some((_, open)), false) => open.take().unwrap_or_else(|| {
+                    let id = self.next_id;
+                    self.next_id += 1;
+                    id
+                }),
+                (None, _) => {
+                    let id = self.next_id;
+                    self.next_id += 1;
+                    id
+                }
+            };
+            if begin_marker && !self.report_begins {
+                continue;
+            }
+            if self.time_offset != 0.0 {
+                e.time += self.time_offset;
+                e.emitted_at += self.time_offset;
+                if let Some(end) = e.end.as_mut() {
+                    *end += self.time_offset;
+                }
+            }
+            out.swap(kept, i);
+            kept += 1;
         }
+        out.truncate(kept);
     }
 }
 

@@ -679,6 +679,19 @@ impl SpectralMatcher {
                     last_good_frame: self.frame_count - 1,
                     score: best_score,
                 });
+                // The begin marker: the daemon sends it at once; the detector keeps
+                // it only for callers that asked for begins.
+                out.push(Event {
+                    id: 0,
+                    pattern: self.patterns[pi].name.clone(),
+                    kind: PatternKind::Continuous,
+                    time: time_sample as f64 / self.rate,
+                    end: None,
+                    strength,
+                    score: f64::from(best_score),
+                    emitted_at,
+                    pitch: None,
+                });
             }
         }
     }

@@ -1,0 +1,464 @@
+//! `onomato listen`, the daemon: capture (or replay) → ring → detector thread →
+//! bounded channel → output thread, and the main thread that starts them, handles
+//! signals (SIGHUP reloads a config that validates, SIGTERM/SIGINT stop cleanly) and
+//! stops them.
+//!
+//! Threads: cpal's audio callback (or the replay thread) fills the ring; the detector
+//! thread ([`DetectorStage`]) reads it and runs the one streaming [`Detector`]; the
+//! output thread (`crate::output`) sends. The main thread only waits for signals and
+//! control messages. [`Status`] is shared by all, through atomics.
+
+pub mod capture;
+
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::sync::Arc;
+use std::time::{Duration, SystemTime};
+
+use anyhow::Context;
+use rtrb::Consumer;
+
+use crate::audio::ChannelSelect;
+use crate::config::Config;
+use crate::detect::{Detector, Event};
+use crate::output::{self, midi, OutputMessage, OutputReport, OutputSettings, PrintMode};
+use crate::pattern;
+
+/// Counters and levels shared by the threads. Writers never block.
+#[derive(Debug, Default)]
+pub struct Status {
+    stream_samples: AtomicU64,
+    input_rate: AtomicU32,
+    overrun_samples: AtomicU64,
+    dropped_events: AtomicU64,
+    events: AtomicU64,
+    level_db_bits: AtomicU32,
+}
+
+impl Status {
+    /// Stream time the detector has reached, seconds.
+    pub fn stream_seconds(&self) -> f64 {
+        let rate = self.input_rate.load(Ordering::Relaxed);
+        if rate == 0 {
+            return 0.0;
+        }
+        self.stream_samples.load(Ordering::Relaxed) as f64 / f64::from(rate)
+    }
+    /// Samples the capture could not put in the ring.
+    pub fn overrun_samples(&self) -> u64 {
+        self.overrun_samples.load(Ordering::Relaxed)
+    }
+    pub(crate) fn add_overrun(&self, n: u64) {
+        self.overrun_samples.fetch_add(n, Ordering::Relaxed);
+    }
+    /// Events the output thread could not take (queue full).
+    pub fn dropped_events(&self) -> u64 {
+        self.dropped_events.load(Ordering::Relaxed)
+    }
+    /// Events handed to the output thread.
+    pub fn events(&self) -> u64 {
+        self.events.load(Ordering::Relaxed)
+    }
+    /// Peak level of the last block read, dBFS.
+    pub fn level_db(&self) -> f32 {
+        f32::from_bits(self.level_db_bits.load(Ordering::Relaxed))
+    }
+}
+
+/// How channels of the ring's frames become the detector's mono input.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameLayout {
+    pub channels: usize,
+    pub select: ChannelSelect,
+}
+
+/// The detector thread's work: read what the ring holds, mix it down, detect, hand the
+/// events over. Every buffer is made in [`DetectorStage::new`]; [`DetectorStage::poll`]
+/// allocates nothing (a test checks it).
+pub struct DetectorStage {
+    detector: Detector,
+    consumer: Consumer<f32>,
+    layout: FrameLayout,
+    block_frames: usize,
+    interleaved: Vec<f32>,
+    mono: Vec<f32>,
+    events: Vec<Event>,
+    sender: SyncSender<OutputMessage>,
+    status: Arc<Status>,
+}
+
+impl DetectorStage {
+    pub fn new(
+        mut detector: Detector,
+        consumer: Consumer<f32>,
+        layout: FrameLayout,
+        block_frames: usize,
+        sender: SyncSender<OutputMessage>,
+        status: Arc<Status>,
+    ) -> Self {
+        detector.report_begins(true);
+        status
+            .input_rate
+            .store(detector.input_rate(), Ordering::Relaxed);
+        status
+            .level_db_bits
+            .store((-120.0f32).to_bits(), Ordering::Relaxed);
+        let channels = layout.channels.max(1);
+        Self {
+            detector,
+            consumer,
+            layout: FrameLayout { channels, ..layout },
+            block_frames,
+            interleaved: vec![0.0; block_frames * channels],
+            mono: Vec::with_capacity(block_frames),
+            events: Vec::with_capacity(256),
+            sender,
+            status,
+        }
+    }
+
+    /// Processes at most one block of what the ring holds; returns the frames read (0
+    /// when the ring had less than a block, unless `drain` is set: then any remainder).
+    pub fn poll(&mut self, drain: bool) -> usize {
+        let channels = self.layout.channels;
+        let available = self.consumer.slots() / channels;
+        let frames = available.min(self.block_frames);
+        if frames == 0 || (frames < self.block_frames && !drain) {
+            return 0;
+        }
+        let samples = frames * channels;
+        let (first, _) = self
+            .consumer
+            .pop_partial_slice(&mut self.interleaved[..samples]);
+        debug_assert_eq!(first.len(), samples);
+        self.mono.clear();
+        let mut peak = 0.0f32;
+        for frame in self.interleaved[..samples].chunks_exact(channels) {
+            let x = match self.layout.select {
+                ChannelSelect::Index(i) if usize::from(i) < channels => frame[usize::from(i)],
+                _ => frame.iter().sum::<f32>() / channels as f32,
+            };
+            peak = peak.max(x.abs());
+            self.mono.push(x);
+        }
+        let db = 20.0 * peak.max(1e-6).log10();
+        self.status
+            .level_db_bits
+            .store(db.to_bits(), Ordering::Relaxed);
+        self.detector.process(&self.mono, &mut self.events);
+        self.status.stream_samples.store(
+            (self.detector.stream_seconds() * f64::from(self.detector.input_rate())).round() as u64,
+            Ordering::Relaxed,
+        );
+        self.hand_over();
+        frames
+    }
+
+    /// Hands the pending events to the output thread; what does not fit is counted.
+    fn hand_over(&mut self) {
+        for e in self.events.drain(..) {
+            match self.sender.try_send(OutputMessage::Event(e)) {
+                Ok(()) => {
+                    self.status.events.fetch_add(1, Ordering::Relaxed);
+                }
+                Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {
+                    self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        }
+    }
+
+    /// The input ended: decide what is pending and hand it over.
+    pub fn finish(&mut self) {
+        while self.poll(true) > 0 {}
+        self.detector.finish(&mut self.events);
+        self.hand_over();
+    }
+
+    /// Swaps in a new detector (reload): it continues the stream's time and numbering.
+    pub fn replace_detector(&mut self, mut detector: Detector) {
+        detector.report_begins(true);
+        detector.continue_after(&self.detector);
+        self.detector = detector;
+    }
+}
+
+/// Options of `listen` that are not in the config.
+#[derive(Debug, Clone)]
+pub struct ListenOptions {
+    /// Replay this WAV file instead of capturing.
+    pub input_file: Option<std::path::PathBuf>,
+    /// Replay speed (1: real time).
+    pub speed: f64,
+    /// Replay the file this many times.
+    pub repeat: u32,
+    pub print: PrintMode,
+}
+
+/// What a `listen` run did.
+#[derive(Debug, Clone, Copy)]
+pub struct ListenReport {
+    pub stream_seconds: f64,
+    pub overrun_samples: u64,
+    pub dropped_events: u64,
+    pub output: OutputReport,
+}
+
+enum Control {
+    Signal(i32),
+    InputEnded,
+    CaptureFailed(String),
+}
+
+enum DetectorCommand {
+    Reload(Box<Detector>, Box<OutputSettings>),
+}
+
+/// The output thread's settings from a config.
+pub fn output_settings(config: &Config, print: PrintMode) -> OutputSettings {
+    OutputSettings {
+        osc: config.osc.clone(),
+        midi: config
+            .midi
+            .as_ref()
+            .map(|m| (m.clone(), midi::note_mappings(&config.patterns, m))),
+        bounce: (config.bounce.is_some()
+            || config
+                .osc
+                .as_ref()
+                .is_some_and(|o| o.bounce_state_rate.is_some()))
+        .then(|| config.bounce_or_default()),
+        print,
+    }
+}
+
+/// Runs the daemon until SIGTERM/SIGINT, or until a replayed file ends. `load` reads
+/// and validates the configuration (at start and on SIGHUP).
+pub fn listen(
+    load: &dyn Fn() -> anyhow::Result<Config>,
+    options: &ListenOptions,
+) -> anyhow::Result<ListenReport> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+
+    let config = load()?;
+    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let status = Arc::new(Status::default());
+    let (control_tx, control_rx) = mpsc::channel::<Control>();
+
+    // Signals first, so that a SIGTERM during start-up is not lost.
+    let mut signals = signal_hook::iterator::Signals::new([SIGHUP, SIGINT, SIGTERM])
+        .context("cannot install signal handlers")?;
+    let signal_handle = signals.handle();
+    {
+        let tx = control_tx.clone();
+        std::thread::Builder::new()
+            .name("onomato-signals".into())
+            .spawn(move || {
+                for s in signals.forever() {
+                    if tx.send(Control::Signal(s)).is_err() {
+                        break;
+                    }
+                }
+            })
+            .context("cannot start the signal thread")?;
+    }
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let input_done = Arc::new(AtomicBool::new(false));
+    let select = config
+        .detector
+        .channel
+        .map_or(ChannelSelect::Mix, ChannelSelect::Index);
+    let block_frames = config.input.buffer_frames as usize;
+
+    // The source: a replayed file or the microphone.
+    let mut capture = None;
+    let mut replay = None;
+    let (rate, layout, consumer) = match &options.input_file {
+        Some(path) => {
+            let (r, consumer) = capture::spawn_replay(
+                path,
+                select,
+                block_frames,
+                options.speed,
+                options.repeat,
+                stop.clone(),
+                input_done.clone(),
+            )?;
+            let rate = r.rate;
+            tracing::info!(file = %path.display(), rate, speed = options.speed, "replaying");
+            replay = Some(r);
+            let layout = FrameLayout {
+                channels: 1,
+                select: ChannelSelect::Mix,
+            };
+            (rate, layout, consumer)
+        }
+        None => {
+            let tx = control_tx.clone();
+            let (c, consumer) = capture::open_capture(&config.input, status.clone(), move |e| {
+                let _ = tx.send(Control::CaptureFailed(e));
+            })?;
+            tracing::info!(device = %c.device, rate = c.rate, channels = c.channels, "capturing");
+            let layout = FrameLayout {
+                channels: usize::from(c.channels),
+                select,
+            };
+            let rate = c.rate;
+            capture = Some(c);
+            (rate, layout, consumer)
+        }
+    };
+
+    let detector = Detector::new(patterns, &config.detector, rate)?;
+    let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
+    let origin = SystemTime::now();
+    let output_thread = {
+        let settings = output_settings(&config, options.print);
+        let status = status.clone();
+        std::thread::Builder::new()
+            .name("onomato-output".into())
+            .spawn(move || output::run(settings, out_rx, status, origin))
+            .context("cannot start the output thread")?
+    };
+
+    let (command_tx, command_rx) = mpsc::channel::<DetectorCommand>();
+    let detector_thread = {
+        let mut stage = DetectorStage::new(
+            detector,
+            consumer,
+            layout,
+            block_frames,
+            out_tx.clone(),
+            status.clone(),
+        );
+        let stop = stop.clone();
+        let input_done = input_done.clone();
+        let control = control_tx.clone();
+        let out_tx = out_tx.clone();
+        // Poll at a quarter of a block's duration, within 1-5 ms.
+        let nap = Duration::from_secs_f64(
+            (block_frames as f64 / f64::from(rate) / 4.0).clamp(0.001, 0.005),
+        );
+        std::thread::Builder::new()
+            .name("onomato-detector".into())
+            .spawn(move || {
+                detector_loop(&mut stage, &stop, &input_done, &command_rx, &out_tx, nap);
+                if input_done.load(Ordering::Acquire) && !stop.load(Ordering::Acquire) {
+                    let _ = control.send(Control::InputEnded);
+                }
+            })
+            .context("cannot start the detector thread")?
+    };
+    drop(out_tx);
+
+    tracing::info!(patterns = config.patterns.len(), rate, "listening");
+    let running_input = config.input.clone();
+    loop {
+        let Ok(message) = control_rx.recv() else {
+            break;
+        };
+        match message {
+            Control::Signal(SIGHUP) => {
+                tracing::info!("SIGHUP: reloading the configuration");
+                match prepare_reload(load, rate, options.print) {
+                    Ok((config, detector, settings)) => {
+                        if config.input != running_input && options.input_file.is_none() {
+                            tracing::warn!("[input] changed: restart the daemon to use the new input settings; keeping the running capture");
+                        }
+                        let _ = command_tx.send(DetectorCommand::Reload(detector, settings));
+                        tracing::info!(patterns = config.patterns.len(), "configuration reloaded");
+                    }
+                    Err(e) => {
+                        tracing::error!("reload refused, keeping the running configuration: {e:#}");
+                    }
+                }
+            }
+            Control::Signal(s) => {
+                tracing::info!(signal = s, "stopping");
+                break;
+            }
+            Control::InputEnded => {
+                tracing::info!("input ended");
+                break;
+            }
+            Control::CaptureFailed(e) => {
+                tracing::error!("audio input error: {e}");
+            }
+        }
+    }
+    stop.store(true, Ordering::Release);
+    let _ = detector_thread.join();
+    drop(command_tx);
+    // The detector thread's senders are gone: the output thread sees Stop (or the
+    // channel's end) after the last event.
+    let output = output_thread.join().unwrap_or_default();
+    drop(capture);
+    if let Some(r) = replay {
+        match r.thread.join() {
+            Ok(Err(e)) => tracing::error!("replay: {e}"),
+            Err(_) => tracing::error!("the replay thread panicked"),
+            Ok(Ok(())) => {}
+        }
+    }
+    signal_handle.close();
+    let report = ListenReport {
+        stream_seconds: status.stream_seconds(),
+        overrun_samples: status.overrun_samples(),
+        dropped_events: status.dropped_events(),
+        output,
+    };
+    tracing::info!(
+        stream_seconds = report.stream_seconds,
+        events = report.output.events,
+        dropped_events = report.dropped_events,
+        overrun_samples = report.overrun_samples,
+        osc_packets = report.output.osc.packets_sent,
+        osc_errors = report.output.osc.send_errors,
+        note_ons = report.output.midi.note_ons,
+        note_offs = report.output.midi.note_offs,
+        "stopped"
+    );
+    Ok(report)
+}
+
+fn detector_loop(
+    stage: &mut DetectorStage,
+    stop: &AtomicBool,
+    input_done: &AtomicBool,
+    commands: &Receiver<DetectorCommand>,
+    out_tx: &SyncSender<OutputMessage>,
+    nap: Duration,
+) {
+    loop {
+        if stop.load(Ordering::Acquire) {
+            break;
+        }
+        if let Ok(DetectorCommand::Reload(detector, settings)) = commands.try_recv() {
+            stage.replace_detector(*detector);
+            // Blocking: a reload must reach the output thread after the old events.
+            let _ = out_tx.send(OutputMessage::Reconfigure(settings));
+        }
+        if stage.poll(false) > 0 {
+            continue;
+        }
+        if input_done.load(Ordering::Acquire) {
+            stage.finish();
+            break;
+        }
+        std::thread::sleep(nap);
+    }
+    let _ = out_tx.send(OutputMessage::Stop);
+}
+
+fn prepare_reload(
+    load: &dyn Fn() -> anyhow::Result<Config>,
+    rate: u32,
+    print: PrintMode,
+) -> anyhow::Result<(Config, Box<Detector>, Box<OutputSettings>)> {
+    let config = load()?;
+    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let detector = Detector::new(patterns, &config.detector, rate)?;
+    let settings = output_settings(&config, print);
+    Ok((config, Box::new(detector), Box::new(settings)))
+}

@@ -1,0 +1,273 @@
+//! The output thread of the daemon: it owns the OSC socket ([`osc::OscSink`]), the MIDI
+//! port ([`midi::MidiSink`]) and the live bounce solver, and prints each event as it is
+//! sent. The detector thread hands it events through a bounded channel (`try_send`,
+//! drops counted); the main thread sends reconfigurations and the stop.
+//!
+//! Sends never run on the detection path. On stop and on reload every held sound is cut
+//! off (its `/end` sent, its note released) and every note is released.
+
+pub mod midi;
+pub mod osc;
+
+use std::io::Write;
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::{Duration, Instant, SystemTime};
+
+use crate::config::{BounceSettings, MidiSettings, OscSettings, PatternKind};
+use crate::daemon::Status;
+use crate::detect::Event;
+use crate::live_bounce::LiveBounce;
+use midi::{MidiSink, NoteMapping};
+use osc::OscSink;
+
+/// Capacity of the channel from the detector thread.
+pub const OUTPUT_QUEUE: usize = 256;
+
+/// How events are printed on stdout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrintMode {
+    /// One readable line per event.
+    Text,
+    /// One JSON event record per line (a continuous event twice: at its begin without
+    /// `end`, then complete).
+    Json,
+    /// Nothing (logs only).
+    None,
+}
+
+/// What the output thread sends where.
+#[derive(Debug, Clone)]
+pub struct OutputSettings {
+    pub osc: Option<OscSettings>,
+    pub midi: Option<(MidiSettings, Vec<NoteMapping>)>,
+    /// The live bounce solver runs when set; its states are sent when OSC has a
+    /// `bounce_state_rate`.
+    pub bounce: Option<BounceSettings>,
+    pub print: PrintMode,
+}
+
+/// Messages to the output thread.
+#[derive(Debug)]
+pub enum OutputMessage {
+    Event(Event),
+    /// New settings (reload): held sounds are cut off and notes released first.
+    Reconfigure(Box<OutputSettings>),
+    /// Cut off held sounds, release every note, and end the thread.
+    Stop,
+}
+
+/// What the output thread did, returned when it ends.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct OutputReport {
+    pub events: u64,
+    pub osc: osc::OscCounters,
+    pub midi: midi::MidiCounters,
+    pub late_bounce_hits: u64,
+}
+
+struct Sinks {
+    osc: Option<OscSink>,
+    midi: Option<MidiSink>,
+    bounce: Option<LiveBounce>,
+    state_delay: f64,
+    heartbeat: Option<Duration>,
+    /// Seconds between two drawn bounce states.
+    state_period: f64,
+    states: bool,
+    print: PrintMode,
+}
+
+impl Sinks {
+    fn new(s: &OutputSettings, origin: SystemTime) -> Self {
+        let state_rate = s.osc.as_ref().and_then(|o| o.bounce_state_rate);
+        Self {
+            osc: s.osc.as_ref().map(|o| OscSink::new(o, origin)),
+            midi: s
+                .midi
+                .as_ref()
+                .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone())),
+            bounce: s
+                .bounce
+                .as_ref()
+                .map(|b| LiveBounce::new(b, state_rate.unwrap_or(60.0))),
+            state_delay: s.bounce.as_ref().map_or(0.0, |b| b.state_delay_seconds),
+            heartbeat: s
+                .osc
+                .as_ref()
+                .and_then(|o| o.heartbeat_seconds)
+                .map(Duration::from_secs_f64),
+            state_period: 1.0 / state_rate.unwrap_or(60.0),
+            states: state_rate.is_some(),
+            print: s.print,
+        }
+    }
+
+    /// States are drawn when OSC asks for them (`bounce_state_rate`).
+    fn states_wanted(&self) -> bool {
+        self.bounce.is_some() && self.osc.is_some() && self.state_period.is_finite() && self.states
+    }
+}
+
+/// Runs the output thread's loop until [`OutputMessage::Stop`] (or every sender is
+/// gone). `origin` is the wall-clock time of stream time 0.
+pub fn run(
+    settings: OutputSettings,
+    rx: Receiver<OutputMessage>,
+    status: Arc<Status>,
+    origin: SystemTime,
+) -> OutputReport {
+    let mut sinks = Sinks::new(&settings, origin);
+    let mut report = OutputReport::default();
+    // Continuous events whose begin was sent and whose end was not.
+    let mut open: Vec<Event> = Vec::with_capacity(16);
+    let mut next_heartbeat = Instant::now();
+    let stdout = std::io::stdout();
+    loop {
+        let now = Instant::now();
+        let mut wake = now + Duration::from_millis(250);
+        if let Some(t) = sinks.midi.as_ref().and_then(MidiSink::next_deadline) {
+            wake = wake.min(t);
+        }
+        if sinks.heartbeat.is_some() {
+            wake = wake.min(next_heartbeat);
+        }
+        if sinks.states_wanted() {
+            wake = wake.min(now + Duration::from_secs_f64(sinks.state_period.min(0.25)));
+        }
+        let message = rx.recv_timeout(wake.saturating_duration_since(now));
+        match message {
+            Ok(OutputMessage::Event(e)) => {
+                report.events += 1;
+                print_event(&mut stdout.lock(), &e, sinks.print);
+                let begin_sent = match (e.kind, e.end) {
+                    (PatternKind::Continuous, None) => {
+                        open.push(e.clone());
+                        false
+                    }
+                    (PatternKind::Continuous, Some(_)) => {
+                        let was = open.iter().position(|o| o.id == e.id);
+                        if let Some(i) = was {
+                            open.swap_remove(i);
+                        }
+                        was.is_some()
+                    }
+                    _ => false,
+                };
+                if let Some(o) = sinks.osc.as_mut() {
+                    o.send_event(&e, begin_sent);
+                }
+                if let Some(m) = sinks.midi.as_mut() {
+                    m.play(&e, Instant::now());
+                }
+                if let Some(b) = sinks.bounce.as_mut() {
+                    if let Some(hit) = b.on_event(&e) {
+                        if let Some(o) = sinks.osc.as_mut() {
+                            o.send_bounce_hit(&hit);
+                        }
+                    }
+                }
+            }
+            Ok(OutputMessage::Reconfigure(new)) => {
+                cut_off(&mut sinks, &mut open, status.stream_seconds());
+                collect(&sinks, &mut report);
+                sinks = Sinks::new(&new, origin);
+                tracing::info!("output settings reloaded");
+            }
+            Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
+                cut_off(&mut sinks, &mut open, status.stream_seconds());
+                collect(&sinks, &mut report);
+                return report;
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+        }
+        let now = Instant::now();
+        if let Some(m) = sinks.midi.as_mut() {
+            m.release_due(now);
+        }
+        if let Some(period) = sinks.heartbeat {
+            if now >= next_heartbeat {
+                next_heartbeat = now + period;
+                if let Some(o) = sinks.osc.as_mut() {
+                    o.send_status(
+                        status.stream_seconds(),
+                        report.events,
+                        status.dropped_events(),
+                        status.overrun_samples(),
+                        status.level_db(),
+                    );
+                }
+            }
+        }
+        if sinks.states_wanted() {
+            let until = status.stream_seconds() - sinks.state_delay;
+            let Sinks { bounce, osc, .. } = &mut sinks;
+            if let (Some(b), Some(o)) = (bounce.as_mut(), osc.as_mut()) {
+                b.draw_until(until, |s| o.send_bounce_state(&s));
+            }
+        }
+    }
+}
+
+/// Ends every open continuous event at stream time `at` and releases every note.
+fn cut_off(sinks: &mut Sinks, open: &mut Vec<Event>, at: f64) {
+    for e in open.drain(..) {
+        tracing::info!(pattern = %e.pattern, id = e.id, "held sound cut off");
+        if let Some(o) = sinks.osc.as_mut() {
+            o.send_cut_off(&e, at);
+        }
+        if let Some(m) = sinks.midi.as_mut() {
+            m.release_event(e.id);
+        }
+    }
+    if let Some(m) = sinks.midi.as_mut() {
+        m.release_all();
+    }
+}
+
+fn collect(sinks: &Sinks, report: &mut OutputReport) {
+    if let Some(o) = &sinks.osc {
+        let c = o.counters();
+        report.osc.packets_sent += c.packets_sent;
+        report.osc.send_errors += c.send_errors;
+    }
+    if let Some(m) = &sinks.midi {
+        let c = m.counters();
+        report.midi.note_ons += c.note_ons;
+        report.midi.note_offs += c.note_offs;
+        report.midi.send_errors += c.send_errors;
+    }
+    if let Some(b) = &sinks.bounce {
+        report.late_bounce_hits += b.late_hits();
+    }
+}
+
+/// Prints one event; a closed stdout (a pipe whose reader left) is ignored.
+fn print_event(out: &mut impl Write, e: &Event, mode: PrintMode) {
+    let _ = match mode {
+        PrintMode::None => return,
+        PrintMode::Json => match serde_json::to_string(e) {
+            Ok(line) => writeln!(out, "{line}"),
+            Err(_) => return,
+        },
+        PrintMode::Text => {
+            let (at, phase, held) = match (e.kind, e.end) {
+                (PatternKind::Impulse, _) => (e.time, "impulse", String::new()),
+                (PatternKind::Continuous, None) => (e.time, "begin", String::new()),
+                (PatternKind::Continuous, Some(end)) => {
+                    (end, "end", format!("  held {:.3} s", end - e.time))
+                }
+            };
+            let pitch = e
+                .pitch
+                .map(|p| format!("  pitch {p:.0} Hz"))
+                .unwrap_or_default();
+            writeln!(
+                out,
+                "{at:9.3} s  {:<10} {phase:<8} strength {:.2}  score {:.2}  #{:<4} decided at {:.3} s{held}{pitch}",
+                e.pattern, e.strength, e.score, e.id, e.emitted_at
+            )
+        }
+    };
+    let _ = out.flush();
+}

@@ -1,0 +1,294 @@
+//! [`OscSink`]: sends events, bounce launches and states, and status as OSC over UDP
+//! to one or more targets. Flat addresses under a prefix, only the OSC 1.0 types i, f
+//! and s, and explicit time arguments (receivers ignore bundle timetags); bundles with
+//! the onset as timetag on request.
+//!
+//! Owned by the output thread. A target that cannot be resolved or does not answer is
+//! logged and retried; it never stops the daemon.
+
+use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
+use std::time::{Duration, Instant, SystemTime};
+
+use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
+
+use crate::config::{OscSettings, PatternKind};
+use crate::detect::Event;
+use crate::live_bounce::{BounceState, LiveHit};
+
+/// How long a target whose name did not resolve waits before the next try.
+const RESOLVE_RETRY: Duration = Duration::from_secs(5);
+
+struct Target {
+    spec: String,
+    addr: Option<SocketAddr>,
+    next_resolve: Instant,
+    failures: u64,
+}
+
+impl Target {
+    fn resolve(&mut self, now: Instant) {
+        if self.addr.is_some() || now < self.next_resolve {
+            return;
+        }
+        match self.spec.to_socket_addrs() {
+            Ok(mut addrs) => {
+                let all: Vec<SocketAddr> = addrs.by_ref().collect();
+                self.addr = all.iter().find(|a| a.is_ipv4()).or(all.first()).copied();
+                if self.addr.is_none() {
+                    tracing::warn!(target = %self.spec, "OSC target resolves to no address; retrying in 5 s");
+                }
+            }
+            Err(e) => {
+                tracing::warn!(target = %self.spec, error = %e, "cannot resolve OSC target; retrying in 5 s");
+            }
+        }
+        self.next_resolve = now + RESOLVE_RETRY;
+    }
+}
+
+/// Counters of what was sent.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct OscCounters {
+    pub packets_sent: u64,
+    pub send_errors: u64,
+}
+
+/// The OSC sender.
+pub struct OscSink {
+    socket_v4: Option<UdpSocket>,
+    socket_v6: Option<UdpSocket>,
+    targets: Vec<Target>,
+    prefix: String,
+    bundle: bool,
+    /// Wall-clock time of stream time 0, for bundle timetags.
+    stream_origin: SystemTime,
+    counters: OscCounters,
+}
+
+impl OscSink {
+    pub fn new(settings: &OscSettings, stream_origin: SystemTime) -> Self {
+        let now = Instant::now();
+        let mut targets: Vec<Target> = settings
+            .targets
+            .iter()
+            .map(|spec| Target {
+                spec: spec.clone(),
+                addr: None,
+                next_resolve: now,
+                failures: 0,
+            })
+            .collect();
+        for t in &mut targets {
+            t.resolve(now);
+        }
+        let bind = |addr: &str| match UdpSocket::bind(addr) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                tracing::warn!(bind = addr, error = %e, "cannot open a UDP socket for OSC");
+                None
+            }
+        };
+        let socket_v4 = bind("0.0.0.0:0");
+        let socket_v6 = if targets.iter().any(|t| t.addr.is_some_and(|a| a.is_ipv6())) {
+            bind("[::]:0")
+        } else {
+            None
+        };
+        Self {
+            socket_v4,
+            socket_v6,
+            targets,
+            prefix: settings.prefix.clone(),
+            bundle: settings.bundle,
+            stream_origin,
+            counters: OscCounters::default(),
+        }
+    }
+
+    pub fn counters(&self) -> OscCounters {
+        self.counters
+    }
+
+    /// Sends one event: `/p` for an impulse, `/p/begin` for a begin marker, `/p/end`
+    /// for a complete continuous event, and `/event` for each.
+    pub fn send_event(&mut self, e: &Event, begin_sent: bool) {
+        let pitch = e.pitch.unwrap_or(0.0) as f32;
+        let id = e.id as i32;
+        let (strength, time) = (e.strength as f32, e.time as f32);
+        let pattern = &*e.pattern;
+        match (e.kind, e.end) {
+            (PatternKind::Impulse, _) => {
+                self.send(
+                    &format!("/{pattern}"),
+                    vec![
+                        OscType::Float(strength),
+                        OscType::Float(time),
+                        OscType::Int(id),
+                    ],
+                    e.time,
+                );
+                self.send_generic(e, "impulse", time, pitch);
+            }
+            (PatternKind::Continuous, None) => {
+                self.send_begin(e);
+            }
+            (PatternKind::Continuous, Some(end)) => {
+                if !begin_sent {
+                    self.send_begin(e);
+                }
+                self.send(
+                    &format!("/{pattern}/end"),
+                    vec![
+                        OscType::Float(strength),
+                        OscType::Float(end as f32),
+                        OscType::Int(id),
+                        OscType::Float(time),
+                        OscType::Float(pitch),
+                    ],
+                    end,
+                );
+                self.send_generic(e, "end", end as f32, pitch);
+            }
+        }
+    }
+
+    fn send_begin(&mut self, e: &Event) {
+        self.send(
+            &format!("/{}/begin", e.pattern),
+            vec![
+                OscType::Float(e.strength as f32),
+                OscType::Float(e.time as f32),
+                OscType::Int(e.id as i32),
+            ],
+            e.time,
+        );
+        self.send_generic(e, "begin", -1.0, 0.0);
+    }
+
+    fn send_generic(&mut self, e: &Event, kind: &str, end: f32, pitch: f32) {
+        self.send(
+            "/event",
+            vec![
+                OscType::String(e.pattern.to_string()),
+                OscType::String(kind.to_string()),
+                OscType::Float(e.strength as f32),
+                OscType::Float(e.time as f32),
+                OscType::Float(end),
+                OscType::Int(e.id as i32),
+                OscType::Float(pitch),
+            ],
+            e.time,
+        );
+    }
+
+    /// Sends a *continuous event cut off* (stop or reload in the middle of a held sound)
+    /// as its `/end` at `at`.
+    pub fn send_cut_off(&mut self, begin: &Event, at: f64) {
+        let mut ended = begin.clone();
+        ended.end = Some(at.max(begin.time));
+        self.send_event(&ended, true);
+    }
+
+    /// `/bounce/hit`: launch velocity, launch time, predicted landing, apex, squash, id.
+    pub fn send_bounce_hit(&mut self, hit: &LiveHit) {
+        self.send(
+            "/bounce/hit",
+            vec![
+                OscType::Float(hit.launch_velocity as f32),
+                OscType::Float(hit.time as f32),
+                OscType::Float(hit.predicted_landing as f32),
+                OscType::Float(hit.apex as f32),
+                OscType::Float(hit.squash as f32),
+                OscType::Int(hit.event as i32),
+            ],
+            hit.time,
+        );
+    }
+
+    /// `/bounce/state`: height, vertical velocity, time.
+    pub fn send_bounce_state(&mut self, s: &BounceState) {
+        self.send(
+            "/bounce/state",
+            vec![
+                OscType::Float(s.height as f32),
+                OscType::Float(s.velocity as f32),
+                OscType::Float(s.time as f32),
+            ],
+            s.time,
+        );
+    }
+
+    /// `/status`: stream time, events sent, events dropped, samples lost to overruns,
+    /// input level (dBFS).
+    pub fn send_status(
+        &mut self,
+        stream_time: f64,
+        events: u64,
+        dropped: u64,
+        overruns: u64,
+        level_db: f32,
+    ) {
+        let clamp = |n: u64| n.min(i32::MAX as u64) as i32;
+        self.send(
+            "/status",
+            vec![
+                OscType::Float(stream_time as f32),
+                OscType::Int(clamp(events)),
+                OscType::Int(clamp(dropped)),
+                OscType::Int(clamp(overruns)),
+                OscType::Float(level_db),
+            ],
+            stream_time,
+        );
+    }
+
+    fn send(&mut self, suffix: &str, args: Vec<OscType>, stream_time: f64) {
+        let message = OscPacket::Message(OscMessage {
+            addr: format!("{}{suffix}", self.prefix),
+            args,
+        });
+        let packet = if self.bundle {
+            let at = self.stream_origin + Duration::from_secs_f64(stream_time.max(0.0));
+            let timetag = OscTime::try_from(at).unwrap_or(OscTime {
+                seconds: 0,
+                fractional: 1,
+            });
+            OscPacket::Bundle(OscBundle {
+                timetag,
+                content: vec![message],
+            })
+        } else {
+            message
+        };
+        let bytes = match rosc::encoder::encode(&packet) {
+            Ok(b) => b,
+            Err(e) => {
+                tracing::warn!(error = %e, "cannot encode an OSC message");
+                return;
+            }
+        };
+        let now = Instant::now();
+        for t in &mut self.targets {
+            t.resolve(now);
+            let Some(addr) = t.addr else { continue };
+            let socket = if addr.is_ipv4() {
+                self.socket_v4.as_ref()
+            } else {
+                self.socket_v6.as_ref()
+            };
+            let Some(socket) = socket else { continue };
+            match socket.send_to(&bytes, addr) {
+                Ok(_) => self.counters.packets_sent += 1,
+                Err(e) => {
+                    self.counters.send_errors += 1;
+                    t.failures += 1;
+                    // The first failure, then one in a thousand: a target that is down
+                    // must not flood the log.
+                    if t.failures % 1000 == 1 {
+                        tracing::warn!(target = %t.spec, error = %e, failures = t.failures, "cannot send OSC; going on");
+                    }
+                }
+            }
+        }
+    }
+}
