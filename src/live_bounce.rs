@@ -124,7 +124,8 @@ pub struct LiveBounce {
     /// Time of the last drawn state.
     drawn_until: f64,
     last_drawn: BounceState,
-    next_frame: f64,
+    /// Index of the next regular state: it is drawn at `index × period`.
+    next_frame: u64,
     late_hits: u64,
 }
 
@@ -148,7 +149,7 @@ impl LiveBounce {
                 height: 0.0,
                 velocity: 0.0,
             },
-            next_frame: 0.0,
+            next_frame: 0,
             late_hits: 0,
         }
     }
@@ -346,7 +347,7 @@ impl LiveBounce {
     /// exactly at each contact and launch.
     pub fn draw_until(&mut self, until: f64, mut emit: impl FnMut(BounceState)) {
         loop {
-            let frame = self.next_frame;
+            let frame = self.next_frame as f64 * self.state_period;
             let next_pending = self.next_pending_time();
             match next_pending {
                 Some(t) if t <= until && t <= frame => {
@@ -354,11 +355,19 @@ impl LiveBounce {
                         break;
                     };
                     if p.time <= self.drawn_until {
-                        // Late: the ball is put on the floor at the next state.
+                        // Late: applied at the next regular state, which shows it.
+                        let at = frame.max(self.drawn_until + 1e-6);
                         self.apply(Pending {
-                            time: self.drawn_until,
+                            time: at,
                             action: p.action,
                         });
+                        if self
+                            .next_pending_time()
+                            .is_some_and(|t| t <= self.drawn_until)
+                        {
+                            continue;
+                        }
+                        self.draw(at, &mut emit);
                         continue;
                     }
                     self.apply(p);
@@ -369,10 +378,11 @@ impl LiveBounce {
                     self.draw(p.time, &mut emit);
                 }
                 _ if frame <= until => {
-                    if frame > self.drawn_until {
+                    // A regular state a hair after one drawn at a hit adds nothing.
+                    if frame > self.drawn_until + 1e-9 {
                         self.draw(frame, &mut emit);
                     }
-                    self.next_frame = frame + self.state_period;
+                    self.next_frame += 1;
                 }
                 _ => break,
             }
