@@ -68,6 +68,7 @@ pub struct MidiSink {
     next_connect: Instant,
     sounding: Vec<SoundingNote>,
     counters: MidiCounters,
+    last_sent: Option<Instant>,
 }
 
 impl MidiSink {
@@ -79,6 +80,7 @@ impl MidiSink {
             next_connect: Instant::now(),
             sounding: Vec::with_capacity(64),
             counters: MidiCounters::default(),
+            last_sent: None,
         };
         sink.connect(Instant::now());
         sink
@@ -115,7 +117,10 @@ impl MidiSink {
             return false;
         };
         match c.send(bytes) {
-            Ok(()) => true,
+            Ok(()) => {
+                self.last_sent = Some(Instant::now());
+                true
+            }
             Err(e) => {
                 self.counters.send_errors += 1;
                 if self.counters.send_errors % 1000 == 1 {
@@ -225,10 +230,21 @@ impl MidiSink {
 }
 
 impl Drop for MidiSink {
+    /// Releases every note and gives the backend time to deliver the note-offs: JACK
+    /// sends them in its next process cycles, after `send` has returned.
     fn drop(&mut self) {
         self.release_all();
+        if let Some(sent) = self.last_sent {
+            let since = sent.elapsed();
+            if since < DELIVERY_GRACE {
+                std::thread::sleep(DELIVERY_GRACE - since);
+            }
+        }
     }
 }
+
+/// How long a closing port waits for its last messages to leave.
+const DELIVERY_GRACE: Duration = Duration::from_millis(100);
 
 fn describe(port: &MidiPortChoice) -> String {
     match port {
