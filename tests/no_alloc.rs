@@ -1,7 +1,9 @@
 //! The detector's per-block work allocates nothing: it will run on the daemon's
 //! detector thread, fed from the audio ring. A counting global allocator watches the
 //! test's own thread while blocks go through `Detector::process`, with impulses,
-//! continuous spans and the resampler all at work.
+//! continuous spans and the resampler all at work. Then the daemon's whole detector
+//! stage: reading the ring, mixing channels down, detecting and handing events to the
+//! output channel.
 
 mod common;
 
@@ -118,6 +120,69 @@ fn processing_blocks_allocates_nothing_at_the_working_rate() {
 fn processing_blocks_allocates_nothing_through_the_resampler() {
     check(Method::Waveform, 48_000, 480);
     check(Method::Spectral, 48_000, 480);
+}
+
+/// The daemon's detector thread work, block by block: stereo frames from the ring at
+/// 48 kHz, mixed down, resampled, detected, handed over with `try_send`.
+fn check_stage(method: Method) {
+    use onomato::audio::ChannelSelect;
+    use onomato::daemon::{DetectorStage, FrameLayout, Status};
+    use onomato::output::OutputMessage;
+    use std::sync::Arc;
+
+    let settings = DetectorSettings {
+        method,
+        ..DetectorSettings::default()
+    };
+    let mut patterns: Vec<_> = three_impulses()
+        .into_iter()
+        .map(|(n, s)| impulse(n, s, &settings))
+        .collect();
+    patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
+    let rate = 48_000;
+    let mono = onomato::audio::resample_clip(&scene(), RATE, rate).unwrap();
+    let stereo: Vec<f32> = mono.iter().flat_map(|&x| [x, x]).collect();
+    let det = Detector::new(patterns, &settings, rate).unwrap();
+    let (mut producer, consumer) = rtrb::RingBuffer::<f32>::new(48_000 * 2);
+    let (tx, rx) = std::sync::mpsc::sync_channel::<OutputMessage>(1024);
+    let layout = FrameLayout {
+        channels: 2,
+        select: ChannelSelect::Mix,
+    };
+    let mut stage = DetectorStage::new(det, consumer, layout, 256, tx, Arc::new(Status::default()));
+    let feed = 2 * 256;
+    let warm = 2 * rate as usize;
+    for chunk in stereo[..warm].chunks(feed) {
+        producer.push_partial_slice(chunk);
+        stage.poll(false);
+    }
+    let n = allocations_in(|| {
+        for chunk in stereo[warm..].chunks(feed) {
+            producer.push_partial_slice(chunk);
+            while stage.poll(false) > 0 {}
+        }
+    });
+    assert_eq!(n, 0, "{n} allocations in the detector stage ({method:?})");
+    stage.finish();
+    let events: Vec<Event> = rx
+        .try_iter()
+        .filter_map(|m| match m {
+            OutputMessage::Event(e) => Some(e),
+            _ => None,
+        })
+        .collect();
+    let impulses = events
+        .iter()
+        .filter(|e| e.kind == onomato::PatternKind::Impulse)
+        .count();
+    let held = events.iter().filter(|e| e.end.is_some()).count();
+    assert_eq!((impulses, held), (18, 1), "{events:#?}");
+}
+
+#[test]
+fn the_daemon_detector_stage_allocates_nothing_per_block() {
+    check_stage(Method::Waveform);
+    check_stage(Method::Spectral);
 }
 
 #[test]
