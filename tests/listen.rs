@@ -192,8 +192,9 @@ impl OscDump {
 
 /// A PulseAudio server of our own with a null sink, default sink and source.
 struct Pulse {
-    _server: Guard,
-    _keepalive: Guard,
+    server: Option<Guard>,
+    keepalive: Option<Guard>,
+    dir: PathBuf,
     runtime: PathBuf,
     home: PathBuf,
 }
@@ -207,14 +208,20 @@ impl Pulse {
         use std::os::unix::fs::PermissionsExt;
         fs::set_permissions(&runtime, fs::Permissions::from_mode(0o700)).unwrap();
         let mut pulse = Self {
-            _server: Guard(Command::new("true").spawn().expect("cannot run true")),
-            _keepalive: Guard(Command::new("true").spawn().unwrap()),
+            server: None,
+            keepalive: None,
+            dir: dir.to_path_buf(),
             runtime,
             home,
         };
-        pulse._server = spawn(
-            pulse
-                .env(&mut Command::new("pulseaudio"))
+        pulse.run();
+        pulse
+    }
+
+    fn run(&mut self) {
+        let log = self.dir.join("pulseaudio.log");
+        self.server = Some(spawn(
+            self.env(&mut Command::new("pulseaudio"))
                 .args([
                     "-n",
                     "--daemonize=no",
@@ -225,33 +232,39 @@ impl Pulse {
                     "--log-target=stderr",
                 ])
                 .stdout(Stdio::null())
-                .stderr(fs::File::create(dir.join("pulseaudio.log")).unwrap()),
+                .stderr(fs::File::create(&log).unwrap()),
             "pulseaudio",
-        );
+        ));
         let start = Instant::now();
-        while !pulse.pactl(&["info"]) {
+        while !self.pactl(&["info"]) {
             assert!(
                 start.elapsed() < Duration::from_secs(10),
                 "PulseAudio did not start: {}",
-                read(&dir.join("pulseaudio.log"))
+                read(&log)
             );
             std::thread::sleep(Duration::from_millis(100));
         }
         // The null sink starts in 2-second blocks: a playing stream and a suspend and
         // resume make data flow at once.
-        pulse._keepalive = spawn(
-            pulse
-                .env(&mut Command::new("pacat"))
+        self.keepalive = Some(spawn(
+            self.env(&mut Command::new("pacat"))
                 .arg("--playback")
                 .stdin(fs::File::open("/dev/zero").unwrap())
                 .stdout(Stdio::null())
                 .stderr(Stdio::null()),
             "pacat",
-        );
+        ));
         std::thread::sleep(Duration::from_millis(300));
-        assert!(pulse.pactl(&["suspend-sink", "onomato_null", "1"]));
-        assert!(pulse.pactl(&["suspend-sink", "onomato_null", "0"]));
-        pulse
+        assert!(self.pactl(&["suspend-sink", "onomato_null", "1"]));
+        assert!(self.pactl(&["suspend-sink", "onomato_null", "0"]));
+    }
+
+    /// Kills the server (as a crash would) and starts a new one in its place.
+    fn crash_and_restart(&mut self, down_for: Duration) {
+        self.keepalive = None;
+        self.server = None;
+        std::thread::sleep(down_for);
+        self.run();
     }
 
     fn env<'a>(&self, cmd: &'a mut Command) -> &'a mut Command {
@@ -267,6 +280,17 @@ impl Pulse {
             .stderr(Stdio::null())
             .status()
             .is_ok_and(|s| s.success())
+    }
+
+    fn play(&self, file: &str) {
+        let ok = self
+            .env(&mut Command::new("paplay"))
+            .args(["--latency-msec=20", file])
+            .current_dir(root())
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "paplay {file} failed");
     }
 }
 
@@ -540,14 +564,7 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
     wait_for_text(&d.stderr, "listening", Duration::from_secs(10));
     std::thread::sleep(Duration::from_millis(500));
     let played_at = unix_now();
-    let ok = pulse
-        .env(&mut Command::new("paplay"))
-        .args(["--latency-msec=20", "examples/beat.wav"])
-        .current_dir(root())
-        .status()
-        .unwrap()
-        .success();
-    assert!(ok, "paplay failed");
+    pulse.play("examples/beat.wav");
     osc.wait_count(|m| m.addr == "/onomato/event", 15, Duration::from_secs(5));
     signal(&d.child, "TERM");
     let mut d = d;
@@ -587,6 +604,45 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
         delays[0] > 0.0,
         "a message arrived before its sound was played: {delays:?}"
     );
+}
+
+#[test]
+fn the_daemon_outlives_a_crash_of_the_sound_server_and_captures_again() {
+    let dir = common::temp_dir("listen-pulse-crash");
+    let mut pulse = Pulse::start(&dir);
+    let osc = OscDump::start(&dir);
+    let d = start_listen(
+        &dir,
+        &["-c", "config/onomato.toml", "--osc", &osc.target()],
+        |c| pulse.env(c),
+    );
+    wait_for_text(&d.stderr, "listening", Duration::from_secs(10));
+    std::thread::sleep(Duration::from_millis(300));
+    pulse.play("examples/beat.wav");
+    let event = |m: &OscLine| m.addr == "/onomato/event" && m.s(1) != "begin";
+    osc.wait_count(event, 13, Duration::from_secs(5));
+
+    pulse.crash_and_restart(Duration::from_secs(1));
+    wait_for_text(&d.stderr, "audio input open again", Duration::from_secs(20));
+    std::thread::sleep(Duration::from_millis(300));
+    pulse.play("examples/beat.wav");
+    osc.wait_count(event, 26, Duration::from_secs(5));
+    let labels: Vec<String> = osc
+        .messages()
+        .iter()
+        .filter(|m| event(m))
+        .map(|m| m.s(0).to_string())
+        .collect();
+    assert_eq!(
+        labels[..13],
+        labels[13..],
+        "the second play is found like the first"
+    );
+
+    signal(&d.child, "TERM");
+    let mut d = d;
+    let status = wait_exit(&mut d.child, Duration::from_secs(10));
+    assert!(status.success(), "exit {status:?}: {}", read(&d.stderr));
 }
 
 #[test]

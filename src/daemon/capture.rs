@@ -54,12 +54,21 @@ fn device_label(device: &cpal::Device) -> String {
     }
 }
 
+/// A stream error, as the capture reports it.
+#[derive(Debug, Clone)]
+pub struct StreamFault {
+    pub message: String,
+    /// The stream is gone and must be opened again (device or server lost).
+    pub fatal: bool,
+}
+
 /// Opens the configured input device and starts capturing into a new ring. The
-/// `on_error` closure is called (from cpal's thread) when the stream fails.
+/// `on_error` closure is called (from cpal's thread, not the audio callback) when the
+/// stream reports an error; overruns of the device (xruns) are only counted.
 pub fn open_capture(
     settings: &InputSettings,
     status: Arc<Status>,
-    on_error: impl FnMut(String) + Send + 'static,
+    on_error: impl FnMut(StreamFault) + Send + 'static,
 ) -> Result<(Capture, Consumer<f32>), CaptureError> {
     let host = cpal::default_host();
     let device = match &settings.device {
@@ -112,15 +121,26 @@ pub fn open_capture(
         sample_rate: rate,
         buffer_size: cpal::BufferSize::Fixed(settings.buffer_frames),
     };
-    let (producer, consumer) =
-        RingBuffer::<f32>::new(ring_samples(settings.ring_seconds, rate, channels));
     let on_error = Arc::new(std::sync::Mutex::new(on_error));
     let build = |config: cpal::StreamConfig, producer: Producer<f32>| {
         let on_error = on_error.clone();
         let status = status.clone();
+        let xrun_status = status.clone();
         let errors = move |e: cpal::Error| {
+            use cpal::ErrorKind as K;
+            let fatal = match e.kind() {
+                K::Xrun => {
+                    xrun_status.add_xrun();
+                    return;
+                }
+                K::DeviceChanged | K::RealtimeDenied | K::DeviceBusy => false,
+                _ => true,
+            };
             if let Ok(mut f) = on_error.lock() {
-                f(e.to_string());
+                f(StreamFault {
+                    message: e.to_string(),
+                    fatal,
+                });
             }
         };
         match format {
@@ -141,12 +161,35 @@ pub fn open_capture(
             other => Err(format!("sample format {other} is not supported")),
         }
     };
-    let stream = build(config, producer).map_err(|m| {
-        fail(format!(
-            "cannot capture {channels} channel(s) at {rate} Hz with {} frames per buffer: {m}",
-            settings.buffer_frames
-        ))
-    })?;
+    let new_ring = || RingBuffer::<f32>::new(ring_samples(settings.ring_seconds, rate, channels));
+    let (producer, consumer) = new_ring();
+    let (stream, consumer) = match build(config.clone(), producer) {
+        Ok(s) => (s, consumer),
+        Err(fixed) => {
+            // Some devices refuse a fixed buffer size: take theirs rather than nothing.
+            let (producer, consumer) = new_ring();
+            let fallback = cpal::StreamConfig {
+                buffer_size: cpal::BufferSize::Default,
+                ..config
+            };
+            match build(fallback, producer) {
+                Ok(s) => {
+                    tracing::warn!(
+                        device = %label,
+                        buffer_frames = settings.buffer_frames,
+                        "the device refused the buffer size ({fixed}); using its default"
+                    );
+                    (s, consumer)
+                }
+                Err(e) => {
+                    return Err(fail(format!(
+                        "cannot capture {channels} channel(s) at {rate} Hz: {e} (with {} frames per buffer: {fixed})",
+                        settings.buffer_frames
+                    )))
+                }
+            }
+        }
+    };
     stream
         .play()
         .map_err(|e| fail(format!("cannot start capturing: {e}")))?;

@@ -32,6 +32,7 @@ pub struct Status {
     overrun_samples: AtomicU64,
     dropped_events: AtomicU64,
     events: AtomicU64,
+    xruns: AtomicU64,
     level_db_bits: AtomicU32,
 }
 
@@ -50,6 +51,13 @@ impl Status {
     }
     pub(crate) fn add_overrun(&self, n: u64) {
         self.overrun_samples.fetch_add(n, Ordering::Relaxed);
+    }
+    /// Overruns and underruns the audio device reported.
+    pub fn xruns(&self) -> u64 {
+        self.xruns.load(Ordering::Relaxed)
+    }
+    pub(crate) fn add_xrun(&self) {
+        self.xruns.fetch_add(1, Ordering::Relaxed);
     }
     /// Events the output thread could not take (queue full).
     pub fn dropped_events(&self) -> u64 {
@@ -179,7 +187,25 @@ impl DetectorStage {
     pub fn replace_detector(&mut self, mut detector: Detector) {
         detector.report_begins(true);
         detector.continue_after(&self.detector);
+        self.status
+            .input_rate
+            .store(detector.input_rate(), Ordering::Relaxed);
         self.detector = detector;
+    }
+
+    /// Reads a new ring from now on (the capture was opened again), with a detector
+    /// for its rate. Stream time counts the audio received: the outage is not in it.
+    pub fn replace_input(
+        &mut self,
+        consumer: Consumer<f32>,
+        layout: FrameLayout,
+        detector: Detector,
+    ) {
+        let channels = layout.channels.max(1);
+        self.consumer = consumer;
+        self.layout = FrameLayout { channels, ..layout };
+        self.interleaved = vec![0.0; self.block_frames * channels];
+        self.replace_detector(detector);
     }
 }
 
@@ -207,11 +233,14 @@ pub struct ListenReport {
 enum Control {
     Signal(i32),
     InputEnded,
-    CaptureFailed(String),
+    CaptureFault(capture::StreamFault),
 }
 
 enum DetectorCommand {
+    /// A reloaded configuration: a new detector, then new output settings.
     Reload(Box<Detector>, Box<OutputSettings>),
+    /// The capture was opened again: a new ring (and layout) and a detector for its rate.
+    NewInput(Consumer<f32>, FrameLayout, Box<Detector>),
 }
 
 /// The output thread's settings from a config.
@@ -232,6 +261,123 @@ pub fn output_settings(config: &Config, print: PrintMode) -> OutputSettings {
     }
 }
 
+/// How long the capture may deliver nothing before it is opened again.
+const STALL_SECONDS: f64 = 3.0;
+/// Pause between two attempts to open a lost capture.
+const REOPEN_EVERY: Duration = Duration::from_secs(2);
+
+/// The microphone, watched: opened again when it fails or stalls.
+struct Microphone {
+    capture: Option<capture::Capture>,
+    select: ChannelSelect,
+    control: mpsc::Sender<Control>,
+    status: Arc<Status>,
+    /// Stream position at the last check, and when it last moved.
+    last_position: u64,
+    last_progress: std::time::Instant,
+    next_attempt: std::time::Instant,
+    failures: u64,
+}
+
+impl Microphone {
+    fn open(
+        &mut self,
+        config: &Config,
+    ) -> Result<(u32, FrameLayout, Consumer<f32>), capture::CaptureError> {
+        let tx = self.control.clone();
+        let (c, consumer) = capture::open_capture(&config.input, self.status.clone(), move |f| {
+            let _ = tx.send(Control::CaptureFault(f));
+        })?;
+        tracing::info!(device = %c.device, rate = c.rate, channels = c.channels, "capturing");
+        let layout = FrameLayout {
+            channels: usize::from(c.channels),
+            select: self.select,
+        };
+        let rate = c.rate;
+        self.capture = Some(c);
+        self.last_progress = std::time::Instant::now();
+        Ok((rate, layout, consumer))
+    }
+
+    /// Drops a capture that failed or stalled; returns whether it did.
+    fn check(&mut self, fault: Option<&capture::StreamFault>) -> bool {
+        let now = std::time::Instant::now();
+        let position = self.status.stream_samples.load(Ordering::Relaxed);
+        if position != self.last_position {
+            self.last_position = position;
+            self.last_progress = now;
+        }
+        let stalled = self.capture.is_some()
+            && now.duration_since(self.last_progress).as_secs_f64() > STALL_SECONDS;
+        let failed = fault.is_some_and(|f| f.fatal);
+        if let Some(f) = fault {
+            if f.fatal {
+                tracing::error!("audio input lost: {}", f.message);
+            } else {
+                tracing::warn!("audio input: {}", f.message);
+            }
+        }
+        if self.capture.is_some() && (stalled || failed) {
+            if stalled {
+                tracing::error!("audio input delivered nothing for {STALL_SECONDS} s");
+            }
+            if let Some(c) = self.capture.take() {
+                release_capture(c);
+            }
+            self.next_attempt = now;
+            return true;
+        }
+        false
+    }
+
+    /// Tries to open the capture again when it is lost and an attempt is due.
+    fn reopen(&mut self, config: &Config) -> Option<(u32, FrameLayout, Consumer<f32>)> {
+        let now = std::time::Instant::now();
+        if self.capture.is_some() || now < self.next_attempt {
+            return None;
+        }
+        self.next_attempt = now + REOPEN_EVERY;
+        match self.open(config) {
+            Ok(opened) => {
+                tracing::info!("audio input open again");
+                self.failures = 0;
+                Some(opened)
+            }
+            Err(e) => {
+                self.failures += 1;
+                if self.failures == 1 || self.failures % 30 == 0 {
+                    tracing::warn!(
+                        attempts = self.failures,
+                        "cannot open the audio input yet: {e}"
+                    );
+                }
+                None
+            }
+        }
+    }
+}
+
+/// Closes a capture without risking the caller: a stream whose sound server died can
+/// hang in its backend when it is closed (ALSA's PulseAudio plugin does), so it is
+/// closed on a thread of its own, waited for one second at most.
+fn release_capture(capture: capture::Capture) {
+    let (done_tx, done_rx) = mpsc::channel::<()>();
+    let spawned = std::thread::Builder::new()
+        .name("onomato-close-input".into())
+        .spawn(move || {
+            drop(capture);
+            let _ = done_tx.send(());
+        });
+    match spawned {
+        Ok(_) => {
+            if done_rx.recv_timeout(Duration::from_secs(1)).is_err() {
+                tracing::warn!("the lost audio input does not close; leaving it behind");
+            }
+        }
+        Err(e) => tracing::warn!("cannot close the audio input on its own thread: {e}"),
+    }
+}
+
 /// Runs the daemon until SIGTERM/SIGINT, or until a replayed file ends. `load` reads
 /// and validates the configuration (at start and on SIGHUP).
 pub fn listen(
@@ -240,7 +386,7 @@ pub fn listen(
 ) -> anyhow::Result<ListenReport> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
-    let config = load()?;
+    let mut config = load()?;
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
     let status = Arc::new(Status::default());
     let (control_tx, control_rx) = mpsc::channel::<Control>();
@@ -272,9 +418,9 @@ pub fn listen(
     let block_frames = config.input.buffer_frames as usize;
 
     // The source: a replayed file or the microphone.
-    let mut capture = None;
+    let mut microphone = None;
     let mut replay = None;
-    let (rate, layout, consumer) = match &options.input_file {
+    let (mut rate, layout, consumer) = match &options.input_file {
         Some(path) => {
             let (r, consumer) = capture::spawn_replay(
                 path,
@@ -295,18 +441,20 @@ pub fn listen(
             (rate, layout, consumer)
         }
         None => {
-            let tx = control_tx.clone();
-            let (c, consumer) = capture::open_capture(&config.input, status.clone(), move |e| {
-                let _ = tx.send(Control::CaptureFailed(e));
-            })?;
-            tracing::info!(device = %c.device, rate = c.rate, channels = c.channels, "capturing");
-            let layout = FrameLayout {
-                channels: usize::from(c.channels),
+            let now = std::time::Instant::now();
+            let mut mic = Microphone {
+                capture: None,
                 select,
+                control: control_tx.clone(),
+                status: status.clone(),
+                last_position: 0,
+                last_progress: now,
+                next_attempt: now,
+                failures: 0,
             };
-            let rate = c.rate;
-            capture = Some(c);
-            (rate, layout, consumer)
+            let opened = mic.open(&config)?;
+            microphone = Some(mic);
+            opened
         }
     };
 
@@ -351,49 +499,78 @@ pub fn listen(
             .context("cannot start the detector thread")?
     };
     drop(out_tx);
+    drop(control_tx);
 
     tracing::info!(patterns = config.patterns.len(), rate, "listening");
-    let running_input = config.input.clone();
     loop {
-        let Ok(message) = control_rx.recv() else {
-            break;
+        let message = match control_rx.recv_timeout(Duration::from_secs(1)) {
+            Ok(m) => Some(m),
+            Err(mpsc::RecvTimeoutError::Timeout) => None,
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
         };
         match message {
-            Control::Signal(SIGHUP) => {
+            Some(Control::Signal(SIGHUP)) => {
                 tracing::info!("SIGHUP: reloading the configuration");
                 match prepare_reload(load, rate, options.print) {
-                    Ok((config, detector, settings)) => {
-                        if config.input != running_input && options.input_file.is_none() {
+                    Ok((new, detector, settings)) => {
+                        if new.input != config.input && options.input_file.is_none() {
                             tracing::warn!("[input] changed: restart the daemon to use the new input settings; keeping the running capture");
                         }
                         let _ = command_tx.send(DetectorCommand::Reload(detector, settings));
-                        tracing::info!(patterns = config.patterns.len(), "configuration reloaded");
+                        tracing::info!(patterns = new.patterns.len(), "configuration reloaded");
+                        config = Config {
+                            input: config.input.clone(),
+                            ..new
+                        };
                     }
                     Err(e) => {
                         tracing::error!("reload refused, keeping the running configuration: {e:#}");
                     }
                 }
             }
-            Control::Signal(s) => {
+            Some(Control::Signal(s)) => {
                 tracing::info!(signal = s, "stopping");
                 break;
             }
-            Control::InputEnded => {
+            Some(Control::InputEnded) => {
                 tracing::info!("input ended");
                 break;
             }
-            Control::CaptureFailed(e) => {
-                tracing::error!("audio input error: {e}");
+            Some(Control::CaptureFault(fault)) => {
+                if let Some(mic) = microphone.as_mut() {
+                    mic.check(Some(&fault));
+                }
+            }
+            None => {}
+        }
+        if let Some(mic) = microphone.as_mut() {
+            mic.check(None);
+            if let Some((new_rate, layout, consumer)) = mic.reopen(&config) {
+                match pattern::load_patterns(&config.patterns, &config.detector)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|p| Ok(Detector::new(p, &config.detector, new_rate)?))
+                {
+                    Ok(detector) => {
+                        rate = new_rate;
+                        let _ = command_tx.send(DetectorCommand::NewInput(
+                            consumer,
+                            layout,
+                            Box::new(detector),
+                        ));
+                    }
+                    Err(e) => tracing::error!("cannot restart detection on the new input: {e:#}"),
+                }
             }
         }
     }
     stop.store(true, Ordering::Release);
     let _ = detector_thread.join();
     drop(command_tx);
-    // The detector thread's senders are gone: the output thread sees Stop (or the
-    // channel's end) after the last event.
+    // The detector thread sent Stop after its last event.
     let output = output_thread.join().unwrap_or_default();
-    drop(capture);
+    if let Some(c) = microphone.and_then(|m| m.capture) {
+        release_capture(c);
+    }
     if let Some(r) = replay {
         match r.thread.join() {
             Ok(Err(e)) => tracing::error!("replay: {e}"),
@@ -413,6 +590,7 @@ pub fn listen(
         events = report.output.events,
         dropped_events = report.dropped_events,
         overrun_samples = report.overrun_samples,
+        xruns = status.xruns(),
         osc_packets = report.output.osc.packets_sent,
         osc_errors = report.output.osc.send_errors,
         note_ons = report.output.midi.note_ons,
@@ -434,10 +612,17 @@ fn detector_loop(
         if stop.load(Ordering::Acquire) {
             break;
         }
-        if let Ok(DetectorCommand::Reload(detector, settings)) = commands.try_recv() {
-            stage.replace_detector(*detector);
-            // Blocking: a reload must reach the output thread after the old events.
-            let _ = out_tx.send(OutputMessage::Reconfigure(settings));
+        match commands.try_recv() {
+            Ok(DetectorCommand::Reload(detector, settings)) => {
+                stage.replace_detector(*detector);
+                // Blocking: a reload must reach the output thread after the old events.
+                let _ = out_tx.send(OutputMessage::Reconfigure(settings));
+            }
+            Ok(DetectorCommand::NewInput(consumer, layout, detector)) => {
+                stage.replace_input(consumer, layout, *detector);
+                let _ = out_tx.send(OutputMessage::CutOff);
+            }
+            Err(_) => {}
         }
         if stage.poll(false) > 0 {
             continue;

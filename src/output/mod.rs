@@ -53,6 +53,8 @@ pub enum OutputMessage {
     Event(Event),
     /// New settings (reload): held sounds are cut off and notes released first.
     Reconfigure(Box<OutputSettings>),
+    /// Cut off held sounds and release every note (the input changed).
+    CutOff,
     /// Cut off held sounds, release every note, and end the thread.
     Stop,
 }
@@ -173,6 +175,9 @@ pub fn run(
                 collect(&sinks, &mut report);
                 sinks = Sinks::new(&new, origin);
                 tracing::info!("output settings reloaded");
+            }
+            Ok(OutputMessage::CutOff) => {
+                cut_off(&mut sinks, &mut open, status.stream_seconds());
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
