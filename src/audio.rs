@@ -225,10 +225,10 @@ impl WavSource {
 
 /// Input frames per resampler chunk: decisions can be taken this often (1.5 ms at
 /// 44.1 kHz), so the chunk adds little latency.
-const RESAMPLER_CHUNK: usize = 64;
+pub(crate) const RESAMPLER_CHUNK: usize = 64;
 /// Length of the resampler's windowed-sinc filter. Its delay, half of it, is removed
 /// from the output; 128 taps cost about 1.5 ms of latency at 44.1 kHz.
-const RESAMPLER_SINC_LEN: usize = 128;
+pub(crate) const RESAMPLER_SINC_LEN: usize = 128;
 
 /// A windowed-sinc resampler (rubato) fed with blocks of any size. Input is collected
 /// into fixed chunks, so the output is the same whatever the block sizes; the resampler's

@@ -330,8 +330,8 @@ pub struct BounceSettings {
     /// Live solver: the interval predicted before two hits have been seen, seconds.
     pub default_interval_seconds: f64,
     /// Live solver: how far the state stream runs behind the input, so that it knows
-    /// each hit before drawing it, seconds.
-    pub state_delay_seconds: f64,
+    /// each hit before drawing it, seconds. `None`: the detector's decision delay.
+    pub state_delay_seconds: Option<f64>,
 }
 
 impl BounceSettings {
@@ -352,7 +352,7 @@ impl BounceSettings {
             styles,
             max_squash: DEFAULT_MAX_SQUASH,
             default_interval_seconds: DEFAULT_INTERVAL_SECONDS,
-            state_delay_seconds: DEFAULT_STATE_DELAY_SECONDS,
+            state_delay_seconds: None,
         }
     }
 }
@@ -360,7 +360,6 @@ impl BounceSettings {
 pub const DEFAULT_GRAVITY: f64 = 9.81;
 pub const DEFAULT_MAX_SQUASH: f64 = 0.4;
 pub const DEFAULT_INTERVAL_SECONDS: f64 = 0.5;
-pub const DEFAULT_STATE_DELAY_SECONDS: f64 = 0.05;
 
 /// A validated configuration.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -867,10 +866,10 @@ impl RawBounce {
             0.05,
             10.0,
         )?;
-        let state_delay_seconds = self
-            .state_delay_seconds
-            .unwrap_or(DEFAULT_STATE_DELAY_SECONDS);
-        check_seconds(item, "state_delay_seconds", state_delay_seconds, 0.0, 2.0)?;
+        let state_delay_seconds = self.state_delay_seconds;
+        if let Some(d) = state_delay_seconds {
+            check_seconds(item, "state_delay_seconds", d, 0.0, 5.0)?;
+        }
         let mut styles = BTreeMap::new();
         for (key, names, style, kind) in [
             ("hard", self.hard, ContactStyle::Hard, PatternKind::Impulse),

@@ -46,7 +46,7 @@ fn settings(g: f64) -> BounceSettings {
         styles,
         max_squash: 0.4,
         default_interval_seconds: 0.5,
-        state_delay_seconds: 0.05,
+        state_delay_seconds: Some(0.05),
     }
 }
 
@@ -204,7 +204,7 @@ fn run_live(
             }
             next += 1;
         }
-        solver.draw_until(now - s.state_delay_seconds, |st| states.push(st));
+        solver.draw_until(now - s.state_delay_seconds.unwrap(), |st| states.push(st));
         now += step;
     }
     (states, hits, solver.late_hits())
@@ -333,7 +333,7 @@ fn live_solver_holds_a_slide_on_the_floor_and_launches_at_its_end() {
             solver.on_event(&events[next]);
             next += 1;
         }
-        solver.draw_until(now - s.state_delay_seconds, |st| states.push(st));
+        solver.draw_until(now - s.state_delay_seconds.unwrap(), |st| states.push(st));
         now += 0.002;
     }
     check_live_invariants(&states, &[0.5, 1.2, 2.4]);

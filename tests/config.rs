@@ -27,6 +27,12 @@ fn the_example_config_loads_with_its_patterns() {
     let bounce = config.bounce.as_ref().expect("example has [bounce]");
     assert_eq!(bounce.styles["pop"], ContactStyle::Soft);
     assert_eq!(bounce.styles["hoo"], ContactStyle::Slide);
+    assert_eq!(config.input.buffer_frames, 256);
+    let osc = config.osc.as_ref().expect("example has [osc]");
+    assert_eq!(osc.targets, ["127.0.0.1:9000"]);
+    assert_eq!(osc.prefix, "/onomato");
+    let notes: Vec<Option<u8>> = config.patterns.iter().map(|p| p.note).collect();
+    assert_eq!(notes, [Some(42), Some(38), Some(36), Some(60)]);
     // Its take paths are relative to the config file, and the files are there.
     let patterns =
         load_patterns(&config.patterns, &config.detector).expect("example patterns load");
@@ -75,6 +81,28 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         (&format!("{TICK}[bounce]\nhard = [\"tick\"]\nsoft = [\"tick\"]\n"), &["'tick' is given more than one contact style"]),
         (&format!("{TICK}[bounce]\ngravity = -9.81\n"), &["gravity must be a positive number (m/s²), found -9.81"]),
         (&format!("{TICK}[bounce]\nmax_squash = 1.5\n"), &["max_squash must be at least 0 and below 1, found 1.5"]),
+        (&format!("{TICK}[bounce]\nstate_delay_seconds = 7\n"), &["state_delay_seconds must be between 0 and 5 seconds, found 7"]),
+        (&format!("{TICK}note = 128\n"), &["pattern #1 ('tick')", "note must be a MIDI number from 0 to 127, found 128"]),
+        (&format!("{TICK}channel = 0\n"), &["pattern #1 ('tick')", "channel must be a MIDI channel from 1 to 16, found 0"]),
+        ("[input]\nbuffer_frames = 4\n", &["[input]", "buffer_frames must be between 16 and 8192, found 4"]),
+        ("[input]\nsample_rate = 1000\n", &["[input]", "sample_rate must be between 8000 and 192000 Hz, found 1000"]),
+        ("[input]\ndevice = \" \"\n", &["[input]", "device is empty"]),
+        ("[input]\nbuffer = 256\n", &["unknown field `buffer`", "buffer_frames"]),
+        ("[osc]\ntargets = [\"localhost\"]\n", &["[osc]", "expected HOST:PORT", "found 'localhost'"]),
+        ("[osc]\ntargets = [\"localhost:0\"]\n", &["UDP port from 1 to 65535", "found '0'"]),
+        ("[osc]\ntargets = [\"localhost:70000\"]\n", &["found '70000'"]),
+        ("[osc]\nprefix = \"onomato\"\n", &["[osc]", "prefix must start with '/'", "found 'onomato'"]),
+        ("[osc]\nprefix = \"/my app\"\n", &["found '/my app'"]),
+        ("[osc]\nheartbeat_seconds = 0\n", &["heartbeat_seconds must be between 0.1 and 3600 seconds, found 0"]),
+        ("[osc]\nbounce_state_rate = 5000\n", &["bounce_state_rate must be between 1 and 1000 Hz, found 5000"]),
+        ("[osc]\nport = 9000\n", &["unknown field `port`", "targets"]),
+        ("[midi]\nconnect = \"a\"\nvirtual_port = \"b\"\n", &["[midi]", "not both"]),
+        ("[midi]\nchannel = 17\n", &["[midi]", "found 17"]),
+        ("[midi]\nvelocity_min = 100\nvelocity_max = 50\n", &["velocity_min (100) must not be above velocity_max (50)"]),
+        ("[midi]\nvelocity_max = 0\n", &["velocity_max must be from 1 to 127, found 0"]),
+        ("[midi]\ngate_seconds = 20\n", &["gate_seconds must be between 0.001 and 10 seconds, found 20"]),
+        ("[midi]\nfull_strength = 0\n", &["full_strength must be a positive number, found 0"]),
+        ("[midi]\nvelocity_curve = 50\n", &["velocity_curve must be between 0.1 and 10, found 50"]),
     ];
     for (text, wanted) in cases {
         let msg = parse_err(text);
@@ -82,6 +110,51 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
             assert!(msg.contains(w), "for {text:?}\nexpected {w:?} in: {msg}");
         }
     }
+}
+
+#[test]
+fn listen_settings_default_when_left_out() {
+    use onomato::config::{MidiPortChoice, MidiSettings, DEFAULT_OSC_PREFIX};
+    let config = Config::parse(&format!("{TICK}[osc]\n[midi]\n"), Path::new("."), "x").unwrap();
+    assert_eq!(config.input.device, None);
+    assert_eq!(config.input.sample_rate, None);
+    assert_eq!(config.input.buffer_frames, 256);
+    let osc = config.osc.unwrap();
+    assert!(osc.targets.is_empty());
+    assert_eq!(osc.prefix, DEFAULT_OSC_PREFIX);
+    assert!(!osc.bundle);
+    assert_eq!(osc.heartbeat_seconds, None);
+    let midi = config.midi.unwrap();
+    assert_eq!(midi.port, MidiPortChoice::Virtual("onomato".into()));
+    assert_eq!(midi.channel, 10);
+    assert_eq!(
+        midi,
+        MidiSettings::with_port(MidiPortChoice::Virtual("onomato".into()))
+    );
+    // No [osc] or [midi]: no OSC, no MIDI.
+    let config = Config::parse(TICK, Path::new("."), "x").unwrap();
+    assert!(config.osc.is_none() && config.midi.is_none());
+}
+
+#[test]
+fn velocity_follows_the_strength_through_the_curve_and_stays_in_1_to_127() {
+    use onomato::config::{MidiPortChoice, MidiSettings};
+    let mut m = MidiSettings::with_port(MidiPortChoice::Virtual("x".into()));
+    m.full_strength = 2.0;
+    assert_eq!(m.velocity(0.0), 1);
+    assert_eq!(m.velocity(1.0), 64); // 1 + 126 × 0.5
+    assert_eq!(m.velocity(2.0), 127);
+    assert_eq!(m.velocity(50.0), 127);
+    assert_eq!(m.velocity(f64::NAN), 1);
+    assert_eq!(m.velocity(-1.0), 1);
+    m.velocity_curve = 2.0;
+    assert_eq!(m.velocity(1.0), 33); // 1 + 126 × 0.25 = 32.5, rounded up
+    m.velocity_min = 40;
+    m.velocity_max = 100;
+    m.velocity_curve = 1.0;
+    assert_eq!(m.velocity(0.0), 40);
+    assert_eq!(m.velocity(1.0), 70);
+    assert_eq!(m.velocity(9.0), 100);
 }
 
 #[test]

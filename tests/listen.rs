@@ -778,6 +778,91 @@ fn sighup_reloads_a_good_config_and_keeps_the_old_one_when_the_new_one_is_broken
     assert!(status.success(), "{}", read(&d.stderr));
 }
 
+#[test]
+fn bounce_hits_states_and_status_reach_osc() {
+    let dir = common::temp_dir("listen-bounce");
+    let osc = OscDump::start(&dir);
+    let p = root().join("examples/patterns");
+    let config = dir.join("bounce.toml");
+    fs::write(
+        &config,
+        format!(
+            r#"[[pattern]]
+name = "tick"
+takes = ["{p}/tick.wav"]
+[[pattern]]
+name = "boom"
+takes = ["{p}/boom.wav"]
+[[pattern]]
+name = "pop"
+takes = ["{p}/pop.wav"]
+
+[osc]
+targets = ["{target}"]
+heartbeat_seconds = 0.5
+bounce_state_rate = 100
+
+[bounce]
+hard = ["tick", "boom"]
+soft = ["pop"]
+"#,
+            p = p.display(),
+            target = osc.target()
+        ),
+    )
+    .unwrap();
+    let config_arg = config.to_string_lossy().to_string();
+    let mut d = start_listen(
+        &dir,
+        &[
+            "-c",
+            &config_arg,
+            "--input",
+            "examples/beat.wav",
+            "--speed",
+            "2",
+        ],
+        |c| c,
+    );
+    let status = wait_exit(&mut d.child, Duration::from_secs(30));
+    assert!(status.success(), "{}", read(&d.stderr));
+    std::thread::sleep(Duration::from_millis(300));
+    let m = osc.messages();
+    let hits: Vec<&OscLine> = m
+        .iter()
+        .filter(|m| m.addr == "/onomato/bounce/hit")
+        .collect();
+    assert_eq!(hits.len(), 11, "one launch per tick, boom and pop");
+    for h in &hits {
+        // v0 = g·Δ/2 and apex = g·Δ²/8 for the predicted flight Δ.
+        let flight = h.f(2) - h.f(1);
+        assert!((h.f(0) - 9.81 * flight / 2.0).abs() < 1e-3, "{h:?}");
+        assert!(
+            (h.f(3) - 9.81 * flight * flight / 8.0).abs() < 1e-3,
+            "{h:?}"
+        );
+    }
+    let states: Vec<(f64, f64)> = m
+        .iter()
+        .filter(|m| m.addr == "/onomato/bounce/state")
+        .map(|m| (m.f(2), m.f(0)))
+        .collect();
+    assert!(states.len() > 500, "{} states", states.len());
+    assert!(states.iter().all(|s| s.1 >= 0.0), "below the floor");
+    for h in &hits {
+        let at = states
+            .iter()
+            .find(|s| (s.0 - h.f(1)).abs() < 1e-5)
+            .unwrap_or_else(|| panic!("no state at the hit {h:?}"));
+        assert_eq!(at.1, 0.0, "not on the floor at the hit {h:?}");
+    }
+    let heartbeats = m.iter().filter(|m| m.addr == "/onomato/status").count();
+    assert!(
+        heartbeats >= 5,
+        "{heartbeats} status messages in 5 s at one per 0.5 s"
+    );
+}
+
 /// A held tone that the spectral method follows from its begin.
 fn held_tone_files(dir: &Path) -> (PathBuf, PathBuf) {
     let rate = 22_050;

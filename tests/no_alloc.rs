@@ -101,6 +101,15 @@ fn check(method: Method, input_rate: u32, block: usize) {
         "{n} allocations while processing at {input_rate} Hz, blocks of {block}"
     );
     det.finish(&mut events);
+    // The bound the live bounce solver relies on holds for every impulse.
+    let bound = det.decision_delay_bound();
+    for e in events.iter().filter(|e| e.end.is_none()) {
+        assert!(
+            e.emitted_at - e.time <= bound,
+            "{method:?}: decided {:.4} s after the onset, bound {bound:.4} s",
+            e.emitted_at - e.time
+        );
+    }
     let impulses = events.iter().filter(|e| e.end.is_none()).count();
     let held = events.iter().filter(|e| e.end.is_some()).count();
     assert_eq!(

@@ -244,7 +244,7 @@ enum DetectorCommand {
 }
 
 /// The output thread's settings from a config.
-pub fn output_settings(config: &Config, print: PrintMode) -> OutputSettings {
+pub fn output_settings(config: &Config, detector: &Detector, print: PrintMode) -> OutputSettings {
     OutputSettings {
         osc: config.osc.clone(),
         midi: config
@@ -257,6 +257,7 @@ pub fn output_settings(config: &Config, print: PrintMode) -> OutputSettings {
                 .as_ref()
                 .is_some_and(|o| o.bounce_state_rate.is_some()))
         .then(|| config.bounce_or_default()),
+        decision_delay: detector.decision_delay_bound(),
         print,
     }
 }
@@ -462,7 +463,7 @@ pub fn listen(
     let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
     let origin = SystemTime::now();
     let output_thread = {
-        let settings = output_settings(&config, options.print);
+        let settings = output_settings(&config, &detector, options.print);
         let status = status.clone();
         std::thread::Builder::new()
             .name("onomato-output".into())
@@ -644,6 +645,6 @@ fn prepare_reload(
     let config = load()?;
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
     let detector = Detector::new(patterns, &config.detector, rate)?;
-    let settings = output_settings(&config, print);
+    let settings = output_settings(&config, &detector, print);
     Ok((config, Box::new(detector), Box::new(settings)))
 }

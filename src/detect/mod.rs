@@ -177,6 +177,23 @@ impl Detector {
         self.report_begins = report;
     }
 
+    /// Longest time from an impulse's onset to its decision (`emitted_at - time`),
+    /// seconds, resampling included. Held sounds end later: by the gap that ends them.
+    pub fn decision_delay_bound(&self) -> f64 {
+        let matcher = match &self.matcher {
+            Matcher::Waveform(m) => m.decision_delay_bound(),
+            Matcher::Spectral(m) => m.decision_delay_bound(),
+        };
+        // The resampler hands over fixed chunks, behind a filter of half its length.
+        let resampling = if self.resampler.is_some() {
+            (crate::audio::RESAMPLER_CHUNK as f64 + crate::audio::RESAMPLER_SINC_LEN as f64)
+                / f64::from(self.input_rate)
+        } else {
+            0.0
+        };
+        matcher + resampling
+    }
+
     /// Input sample rate this detector was built for.
     pub fn input_rate(&self) -> u32 {
         self.input_rate

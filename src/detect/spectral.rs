@@ -391,6 +391,14 @@ impl SpectralMatcher {
     }
 
     /// Samples per frame hop.
+    /// Longest time from an impulse's onset to its decision, seconds: the decision
+    /// frames and their shift, the frames the onset may be placed before its detection
+    /// (the rise is looked for over 6 frames), and one window.
+    pub fn decision_delay_bound(&self) -> f64 {
+        let frames = self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
+        (frames * self.hop() + self.analyzer.win) as f64 / self.rate
+    }
+
     fn hop(&self) -> usize {
         self.analyzer.hop
     }

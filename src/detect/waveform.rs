@@ -282,6 +282,12 @@ impl WaveformMatcher {
         }
     }
 
+    /// Longest time from an impulse's onset to its decision, seconds: a whole segment
+    /// and the widest suppression window.
+    pub fn decision_delay_bound(&self) -> f64 {
+        (self.fft_len as u64 + self.max_half_window + 2) as f64 / self.rate
+    }
+
     /// FFT segment length and hop (new samples per segment).
     pub fn segment_geometry(&self) -> (usize, usize) {
         (self.fft_len, self.hop)

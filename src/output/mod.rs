@@ -44,6 +44,8 @@ pub struct OutputSettings {
     /// The live bounce solver runs when set; its states are sent when OSC has a
     /// `bounce_state_rate`.
     pub bounce: Option<BounceSettings>,
+    /// The detector's longest decision delay: the bounce states' default delay.
+    pub decision_delay: f64,
     pub print: PrintMode,
 }
 
@@ -93,7 +95,11 @@ impl Sinks {
                 .bounce
                 .as_ref()
                 .map(|b| LiveBounce::new(b, state_rate.unwrap_or(60.0))),
-            state_delay: s.bounce.as_ref().map_or(0.0, |b| b.state_delay_seconds),
+            state_delay: s
+                .bounce
+                .as_ref()
+                .and_then(|b| b.state_delay_seconds)
+                .unwrap_or(s.decision_delay),
             heartbeat: s
                 .osc
                 .as_ref()
@@ -163,7 +169,16 @@ pub fn run(
                     m.play(&e, Instant::now());
                 }
                 if let Some(b) = sinks.bounce.as_mut() {
-                    if let Some(hit) = b.on_event(&e) {
+                    let late = b.late_hits();
+                    let hit = b.on_event(&e);
+                    if b.late_hits() > late && late % 100 == 0 {
+                        tracing::warn!(
+                            late_hits = b.late_hits(),
+                            delay = sinks.state_delay,
+                            "a hit was decided after the bounce states had passed it; raise [bounce] state_delay_seconds"
+                        );
+                    }
+                    if let Some(hit) = hit {
                         if let Some(o) = sinks.osc.as_mut() {
                             o.send_bounce_hit(&hit);
                         }
@@ -180,6 +195,13 @@ pub fn run(
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
+                // The states the delay held back, up to the end of the stream.
+                if sinks.states_wanted() {
+                    let Sinks { bounce, osc, .. } = &mut sinks;
+                    if let (Some(b), Some(o)) = (bounce.as_mut(), osc.as_mut()) {
+                        b.draw_until(status.stream_seconds(), |s| o.send_bounce_state(&s));
+                    }
+                }
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
                 collect(&sinks, &mut report);
                 return report;
