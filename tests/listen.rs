@@ -248,7 +248,7 @@ impl Pulse {
         // resume make data flow at once.
         self.keepalive = Some(spawn(
             self.env(&mut Command::new("pacat"))
-                .arg("--playback")
+                .args(["--playback", "--latency-msec=20"])
                 .stdin(fs::File::open("/dev/zero").unwrap())
                 .stdout(Stdio::null())
                 .stderr(Stdio::null()),

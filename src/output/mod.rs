@@ -147,7 +147,6 @@ pub fn run(
         match message {
             Ok(OutputMessage::Event(e)) => {
                 report.events += 1;
-                print_event(&mut stdout.lock(), &e, sinks.print);
                 let begin_sent = match (e.kind, e.end) {
                     (PatternKind::Continuous, None) => {
                         open.push(e.clone());
@@ -162,6 +161,7 @@ pub fn run(
                     }
                     _ => false,
                 };
+                print_event(&mut stdout.lock(), &e, begin_sent, sinks.print);
                 if let Some(o) = sinks.osc.as_mut() {
                     o.send_event(&e, begin_sent);
                 }
@@ -270,7 +270,7 @@ fn collect(sinks: &Sinks, report: &mut OutputReport) {
 }
 
 /// Prints one event; a closed stdout (a pipe whose reader left) is ignored.
-fn print_event(out: &mut impl Write, e: &Event, mode: PrintMode) {
+fn print_event(out: &mut impl Write, e: &Event, begin_sent: bool, mode: PrintMode) {
     let _ = match mode {
         PrintMode::None => return,
         PrintMode::Json => match serde_json::to_string(e) {
@@ -281,8 +281,12 @@ fn print_event(out: &mut impl Write, e: &Event, mode: PrintMode) {
             let (at, phase, held) = match (e.kind, e.end) {
                 (PatternKind::Impulse, _) => (e.time, "impulse", String::new()),
                 (PatternKind::Continuous, None) => (e.time, "begin", String::new()),
-                (PatternKind::Continuous, Some(end)) => {
+                (PatternKind::Continuous, Some(end)) if begin_sent => {
                     (end, "end", format!("  held {:.3} s", end - e.time))
+                }
+                // Begin and end decided together (waveform method).
+                (PatternKind::Continuous, Some(end)) => {
+                    (e.time, "held", format!("  until {end:.3} s"))
                 }
             };
             let pitch = e
