@@ -398,3 +398,93 @@ fn check_accepts_the_example_and_refuses_a_broken_config() {
     );
     assert!(stderr(&out).contains(&want), "{}", stderr(&out));
 }
+
+#[test]
+fn listen_mistakes_are_named_and_exit_1() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &[
+                "listen",
+                "-c",
+                "config/onomato.toml",
+                "--input",
+                "no/such.wav",
+            ],
+            "no/such.wav",
+        ),
+        (
+            &[
+                "listen",
+                "-c",
+                "config/onomato.toml",
+                "--input",
+                "examples/beat.wav",
+                "--speed",
+                "0",
+            ],
+            "--speed must be above 0 and at most 1000, found 0",
+        ),
+        (
+            &["listen", "-c", "config/onomato.toml", "--osc", "localhost"],
+            "--osc: expected HOST:PORT",
+        ),
+        (
+            &["listen", "--input", "examples/beat.wav"],
+            "no patterns to detect",
+        ),
+    ];
+    for (args, wanted) in cases {
+        let o = onomato(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(wanted),
+            "{args:?}: expected {wanted:?} in {}",
+            stderr(&o)
+        );
+        assert!(stdout(&o).is_empty(), "{args:?}");
+    }
+    // --speed without --input is a usage error.
+    let o = onomato(&["listen", "-c", "config/onomato.toml", "--speed", "2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn listen_logs_json_lines_when_asked() {
+    let o = onomato(&[
+        "listen",
+        "-c",
+        "config/onomato.toml",
+        "--input",
+        "examples/beat.wav",
+        "--speed",
+        "20",
+        "--log-format",
+        "json",
+        "--print",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).is_empty(), "--print none prints nothing");
+    let lines: Vec<Value> = stderr(&o)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l}: {e}")))
+        .collect();
+    assert!(lines.iter().any(|l| l["fields"]["message"] == "listening"));
+    let stopped = lines
+        .iter()
+        .find(|l| l["fields"]["message"] == "stopped")
+        .expect("a final log line");
+    assert_eq!(stopped["fields"]["events"], 13);
+    assert_eq!(stopped["fields"]["dropped_events"], 0);
+}
+
+#[test]
+fn devices_lists_audio_inputs_and_midi_ports() {
+    let o = onomato(&["devices"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("audio inputs:") && out.contains("MIDI output ports:"),
+        "{out}"
+    );
+}
