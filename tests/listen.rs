@@ -32,6 +32,35 @@ impl Drop for Guard {
     }
 }
 
+/// A server stopped with SIGTERM (then killed if it does not stop): jackd removes its
+/// entry from JACK's shared registry only then, and the registry holds few servers.
+struct Server(Child);
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        // SAFETY: kill(2) on our own child's pid.
+        unsafe { libc::kill(self.0.id() as libc::pid_t, libc::SIGTERM) };
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(3) {
+            if let Ok(Some(_)) = self.0.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+impl Guard {
+    /// The child, no longer killed on drop.
+    fn take(self) -> Child {
+        let me = std::mem::ManuallyDrop::new(self);
+        // SAFETY: `me` is never used or dropped again.
+        unsafe { std::ptr::read(&me.0) }
+    }
+}
+
 fn spawn(cmd: &mut Command, what: &str) -> Guard {
     match cmd.spawn() {
         Ok(c) => Guard(c),
@@ -42,13 +71,15 @@ fn spawn(cmd: &mut Command, what: &str) -> Guard {
 }
 
 fn signal(child: &Child, name: &str) {
-    let ok = Command::new("kill")
-        .arg(format!("-{name}"))
-        .arg(child.id().to_string())
-        .status()
-        .expect("kill")
-        .success();
-    assert!(ok, "cannot send SIG{name}");
+    let number = match name {
+        "HUP" => libc::SIGHUP,
+        "TERM" => libc::SIGTERM,
+        "INT" => libc::SIGINT,
+        other => panic!("unknown signal {other}"),
+    };
+    // SAFETY: kill(2) with a pid of our own child; no memory is involved.
+    let rc = unsafe { libc::kill(child.id() as libc::pid_t, number) };
+    assert_eq!(rc, 0, "cannot send SIG{name}");
 }
 
 fn wait_exit(child: &mut Child, timeout: Duration) -> ExitStatus {
@@ -297,8 +328,9 @@ impl Pulse {
 /// A JACK server of our own (dummy driver) and `jack_midi_dump` listening on it.
 #[cfg(feature = "jack")]
 struct Jack {
-    _server: Guard,
+    // Dropped in this order: the receiver, then the server.
     _dump: Guard,
+    _server: Server,
     name: String,
     dump: PathBuf,
 }
@@ -306,7 +338,9 @@ struct Jack {
 #[cfg(feature = "jack")]
 impl Jack {
     fn start(dir: &Path, tag: &str) -> Self {
-        let name = format!("onomato_{tag}_{}", std::process::id());
+        // A fixed name per test: JACK's registry holds 8 servers, and an entry left by
+        // a server that died is reused only by a server of the same name.
+        let name = format!("onomato_{tag}");
         let server = spawn(
             Command::new("jackd")
                 .env("JACK_NO_AUDIO_RESERVATION", "1")
@@ -339,7 +373,8 @@ impl Jack {
             }
             assert!(
                 start.elapsed() < Duration::from_secs(10),
-                "jackd did not start"
+                "jackd did not start: {}",
+                read(&dir.join("jackd.log"))
             );
             std::thread::sleep(Duration::from_millis(100));
         }
@@ -353,10 +388,27 @@ impl Jack {
                 .stderr(Stdio::null()),
             "jack_midi_dump (jack-tools)",
         );
-        std::thread::sleep(Duration::from_millis(500));
+        // The receiver's port must exist before the daemon looks for it.
+        let start = Instant::now();
+        loop {
+            let ports = Command::new("jack_lsp")
+                .env("JACK_DEFAULT_SERVER", &name)
+                .env("JACK_NO_START_SERVER", "1")
+                .output()
+                .map(|o| String::from_utf8_lossy(&o.stdout).to_string())
+                .unwrap_or_default();
+            if ports.contains("midi-monitor:input") {
+                break;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "jack_midi_dump did not start: {ports}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
         Self {
-            _server: server,
             _dump: dumper,
+            _server: Server(server.take()),
             name,
             dump,
         }
@@ -863,6 +915,52 @@ soft = ["pop"]
     );
 }
 
+#[test]
+fn bundles_carry_the_onset_as_their_timetag() {
+    let dir = common::temp_dir("listen-bundle");
+    let osc = OscDump::start(&dir);
+    let p = root().join("examples/patterns");
+    let config = dir.join("bundle.toml");
+    fs::write(
+        &config,
+        format!(
+            "[[pattern]]\nname = \"tick\"\ntakes = [\"{p}/tick.wav\"]\n\n[osc]\ntargets = [\"{t}\"]\nbundle = true\n",
+            p = p.display(),
+            t = osc.target()
+        ),
+    )
+    .unwrap();
+    let config_arg = config.to_string_lossy().to_string();
+    let mut d = start_listen(
+        &dir,
+        &["-c", &config_arg, "--input", "examples/beat.wav"],
+        |c| c,
+    );
+    assert!(
+        wait_exit(&mut d.child, Duration::from_secs(30)).success(),
+        "{}",
+        read(&d.stderr)
+    );
+    osc.wait_count(|m| m.addr == "/onomato/tick", 5, Duration::from_secs(5));
+    // oscdump prints a bundle's timetag (for a lone message, the arrival): the
+    // timetags are the onsets on the wall clock, though the messages left later.
+    let ticks: Vec<OscLine> = osc
+        .messages()
+        .into_iter()
+        .filter(|m| m.addr == "/onomato/tick")
+        .collect();
+    for pair in ticks.windows(2) {
+        let tag_gap = pair[1].arrival - pair[0].arrival;
+        let onset_gap = pair[1].f(1) - pair[0].f(1);
+        assert!(
+            (tag_gap - onset_gap).abs() < 0.002,
+            "timetag gap {tag_gap} vs onset gap {onset_gap}"
+        );
+    }
+    let wall_origin = ticks[0].arrival - ticks[0].f(1);
+    assert!(wall_origin < unix_now() && unix_now() - wall_origin < 60.0);
+}
+
 /// A held tone that the spectral method follows from its begin.
 fn held_tone_files(dir: &Path) -> (PathBuf, PathBuf) {
     let rate = 22_050;
@@ -879,7 +977,7 @@ fn held_tone_files(dir: &Path) -> (PathBuf, PathBuf) {
 }
 
 #[test]
-fn sigterm_in_the_middle_of_a_held_sound_ends_it_on_osc() {
+fn sigint_in_the_middle_of_a_held_sound_ends_it_on_osc() {
     let dir = common::temp_dir("listen-cutoff-osc");
     let osc = OscDump::start(&dir);
     let (pattern, recording) = held_tone_files(&dir);
@@ -905,7 +1003,7 @@ fn sigterm_in_the_middle_of_a_held_sound_ends_it_on_osc() {
         Duration::from_secs(10),
     );
     std::thread::sleep(Duration::from_millis(500));
-    signal(&d.child, "TERM");
+    signal(&d.child, "INT");
     let mut d = d;
     let status = wait_exit(&mut d.child, Duration::from_secs(10));
     assert!(status.success(), "{}", read(&d.stderr));
@@ -958,6 +1056,7 @@ connect = "midi-monitor"
 channel = 10
 gate_seconds = 0.03
 full_strength = 1.25
+strength_cc = 11
 "#,
                 p = patterns.display()
             ),
@@ -989,6 +1088,16 @@ full_strength = 1.25
             .iter()
             .filter(|m| m.0 & 0xF0 == 0x90 && m.2 > 0)
             .collect();
+        // A held sound's note-on follows a control change 11 with its velocity.
+        for (i, m) in midi.iter().enumerate() {
+            if m.0 == 0x99 && m.1 == 60 {
+                assert!(
+                    i > 0 && midi[i - 1] == (0xB9, 11, m.2),
+                    "no CC 11 before {m:?}: {midi:?}"
+                );
+            }
+        }
+        assert_eq!(midi.iter().filter(|m| m.0 == 0xB9).count(), 2, "{midi:?}");
         let offs: Vec<&(u8, u8, u8)> = midi.iter().filter(|m| m.0 & 0xF0 == 0x80).collect();
         // The events the daemon printed, in order, give the expected notes.
         let events: Vec<serde_json::Value> = read(&d.stdout)
@@ -1033,6 +1142,74 @@ full_strength = 1.25
         }
         assert!(sounding.is_empty(), "notes left on: {sounding:?}");
         assert_eq!(offs.len(), ons.len());
+    }
+
+    #[test]
+    fn a_virtual_port_can_be_connected_to_by_another_program() {
+        let dir = common::temp_dir("listen-jack-virtual");
+        let jack = Jack::start(&dir, "virtual");
+        let d = start_listen(
+            &dir,
+            &[
+                "-c",
+                "config/onomato.toml",
+                "--input",
+                "examples/beat.wav",
+                "--repeat",
+                "3",
+                "--speed",
+                "4",
+                "--midi-virtual",
+                "drums",
+                "--print",
+                "json",
+            ],
+            |c| {
+                c.env("JACK_DEFAULT_SERVER", &jack.name)
+                    .env("JACK_NO_START_SERVER", "1")
+            },
+        );
+        wait_for_text(&d.stderr, "MIDI output open", Duration::from_secs(10));
+        // Another program connects the daemon's port to the receiver.
+        let ports = Command::new("jack_lsp")
+            .env("JACK_DEFAULT_SERVER", &jack.name)
+            .output()
+            .unwrap();
+        let ports = String::from_utf8_lossy(&ports.stdout).to_string();
+        let ours = ports
+            .lines()
+            .find(|p| p.ends_with(":drums"))
+            .unwrap_or_else(|| panic!("no port named drums: {ports}"))
+            .to_string();
+        let ok = Command::new("jack_connect")
+            .args([ours.as_str(), "midi-monitor:input"])
+            .env("JACK_DEFAULT_SERVER", &jack.name)
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "jack_connect {ours} failed");
+        let start = Instant::now();
+        while jack.messages().iter().filter(|m| m.0 == 0x99).count() < 3 {
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "no notes through the virtual port"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        signal(&d.child, "TERM");
+        let mut d = d;
+        assert!(wait_exit(&mut d.child, Duration::from_secs(10)).success());
+        // The example config's notes: tick 42, pop 38, boom 36, hoo 60.
+        let notes: Vec<u8> = jack
+            .messages()
+            .iter()
+            .filter(|m| m.0 == 0x99)
+            .map(|m| m.1)
+            .collect();
+        assert!(
+            notes.iter().all(|n| [42, 38, 36, 60].contains(n)),
+            "{notes:?}"
+        );
     }
 
     #[test]

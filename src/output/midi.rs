@@ -181,6 +181,9 @@ impl MidiSink {
                 } else {
                     // Begin and end decided together (waveform method): play it gated.
                     self.release_matching(|s| s.note == note && s.channel == channel);
+                    if let Some(cc) = self.settings.strength_cc {
+                        self.send(&[0xB0 | (channel - 1), cc, velocity.min(127)]);
+                    }
                     self.note_on(note, channel, velocity);
                     self.sounding.push(SoundingNote {
                         note,
