@@ -7,16 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=()
-command -v pkg-config >/dev/null 2>&1 || packages+=(pkg-config)
-dpkg -s libasound2-dev >/dev/null 2>&1 || packages+=(libasound2-dev)
-if [ "${#packages[@]}" -gt 0 ]; then
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  echo "installing ${packages[*]}" >&2
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
-fi
+bash scripts/install-packages.sh pkg-config libasound2-dev
 
 cargo run --release --locked -- listen --config config/onomato.toml \
   --input examples/beat.wav --print text "$@"

@@ -11,33 +11,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# command -> Debian package
-need=(
-  "espeak-ng espeak-ng"                 # a test rebuilds the bundled example
-  "sox sox"
-  "pkg-config pkg-config"               # building: ALSA and JACK libraries
-  "pulseaudio pulseaudio"               # the microphone: a null sink's monitor
-  "paplay pulseaudio-utils"
-  "oscdump liblo-tools"                 # an independent OSC receiver
-  "jackd jackd2"                        # MIDI through JACK
-  "jack_midi_dump jack-tools"
-  "stdbuf coreutils"
+packages=(
+  espeak-ng sox                          # a test rebuilds the bundled example
+  pkg-config libasound2-dev libjack-jackd2-dev   # building: ALSA and JACK
+  pulseaudio pulseaudio-utils libasound2-plugins # the microphone: a null sink's monitor
+  liblo-tools                            # oscdump, an independent OSC receiver
+  jackd2 jack-tools                      # MIDI through JACK, jack_midi_dump
+  coreutils                              # stdbuf
 )
-packages=()
-for pair in "${need[@]}"; do
-  read -r cmd pkg <<<"$pair"
-  command -v "$cmd" >/dev/null 2>&1 || packages+=("$pkg")
-done
-# Libraries (no command to look for).
-for pkg in libasound2-dev libjack-jackd2-dev libasound2-plugins; do
-  dpkg -s "$pkg" >/dev/null 2>&1 || packages+=("$pkg")
-done
-if [ "${#packages[@]}" -gt 0 ]; then
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  echo "installing ${packages[*]}" >&2
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
-fi
+bash scripts/install-packages.sh "${packages[@]}"
 
 cargo test --release --locked --features jack

@@ -96,6 +96,15 @@ fn wait_exit(child: &mut Child, timeout: Duration) -> ExitStatus {
     }
 }
 
+/// Sends SIGTERM and expects a clean exit (code 0) within 10 s; returns the log.
+fn stop_cleanly(mut d: Daemon) -> String {
+    signal(&d.child, "TERM");
+    let status = wait_exit(&mut d.child, Duration::from_secs(10));
+    let log = read(&d.stderr);
+    assert!(status.success(), "exit {status:?}: {log}");
+    log
+}
+
 fn read(path: &Path) -> String {
     let mut s = String::new();
     if let Ok(mut f) = fs::File::open(path) {
@@ -618,11 +627,8 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
     let played_at = unix_now();
     pulse.play("examples/beat.wav");
     osc.wait_count(|m| m.addr == "/onomato/event", 15, Duration::from_secs(5));
-    signal(&d.child, "TERM");
-    let mut d = d;
-    let status = wait_exit(&mut d.child, Duration::from_secs(10));
-    assert!(status.success(), "exit {status:?}: {}", read(&d.stderr));
-    assert!(read(&d.stderr).contains("audio") || read(&d.stderr).contains("capturing"));
+    let log = stop_cleanly(d);
+    assert!(log.contains("capturing"), "{log}");
     let messages = osc.messages();
     // The stream starts when capture starts: the sounds' times are shifted by the wait
     // before paplay. Their spacing is the file's.
@@ -691,10 +697,7 @@ fn the_daemon_outlives_a_crash_of_the_sound_server_and_captures_again() {
         "the second play is found like the first"
     );
 
-    signal(&d.child, "TERM");
-    let mut d = d;
-    let status = wait_exit(&mut d.child, Duration::from_secs(10));
-    assert!(status.success(), "exit {status:?}: {}", read(&d.stderr));
+    let _ = stop_cleanly(d);
 }
 
 #[test]
@@ -824,10 +827,7 @@ fn sighup_reloads_a_good_config_and_keeps_the_old_one_when_the_new_one_is_broken
         "times went back: {times:?}"
     );
 
-    signal(&d.child, "TERM");
-    let mut d = d;
-    let status = wait_exit(&mut d.child, Duration::from_secs(10));
-    assert!(status.success(), "{}", read(&d.stderr));
+    let _ = stop_cleanly(d);
 }
 
 #[test]
@@ -1196,9 +1196,7 @@ strength_cc = 11
             );
             std::thread::sleep(Duration::from_millis(50));
         }
-        signal(&d.child, "TERM");
-        let mut d = d;
-        assert!(wait_exit(&mut d.child, Duration::from_secs(10)).success());
+        let _ = stop_cleanly(d);
         // The example config's notes: tick 42, pop 38, boom 36, hoo 60.
         let notes: Vec<u8> = jack
             .messages()
@@ -1245,10 +1243,7 @@ strength_cc = 11
             "the held note is on before the stop: {held:?}"
         );
         assert_eq!(held.iter().filter(|m| m.0 == 0x89).count(), 0, "{held:?}");
-        signal(&d.child, "TERM");
-        let mut d = d;
-        let status = wait_exit(&mut d.child, Duration::from_secs(10));
-        assert!(status.success(), "{}", read(&d.stderr));
+        let _ = stop_cleanly(d);
         std::thread::sleep(Duration::from_millis(300));
         let midi = jack.messages();
         assert_eq!(midi.len(), 2, "{midi:?}");

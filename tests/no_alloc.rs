@@ -72,7 +72,8 @@ fn scene() -> Vec<f32> {
     rec
 }
 
-fn check(method: Method, input_rate: u32, block: usize) {
+/// Three impulse patterns and a held hum, for `method`.
+fn patterns_for(method: Method) -> (DetectorSettings, Vec<onomato::Pattern>) {
     let settings = DetectorSettings {
         method,
         ..DetectorSettings::default()
@@ -82,6 +83,11 @@ fn check(method: Method, input_rate: u32, block: usize) {
         .map(|(n, s)| impulse(n, s, &settings))
         .collect();
     patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
+    (settings, patterns)
+}
+
+fn check(method: Method, input_rate: u32, block: usize) {
+    let (settings, patterns) = patterns_for(method);
     let rec = onomato::audio::resample_clip(&scene(), RATE, input_rate).unwrap();
     let mut det = Detector::new(patterns, &settings, input_rate).unwrap();
     let mut events: Vec<Event> = Vec::with_capacity(256);
@@ -139,15 +145,7 @@ fn check_stage(method: Method) {
     use onomato::output::OutputMessage;
     use std::sync::Arc;
 
-    let settings = DetectorSettings {
-        method,
-        ..DetectorSettings::default()
-    };
-    let mut patterns: Vec<_> = three_impulses()
-        .into_iter()
-        .map(|(n, s)| impulse(n, s, &settings))
-        .collect();
-    patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
+    let (settings, patterns) = patterns_for(method);
     let rate = 48_000;
     let mono = onomato::audio::resample_clip(&scene(), RATE, rate).unwrap();
     let stereo: Vec<f32> = mono.iter().flat_map(|&x| [x, x]).collect();
@@ -162,12 +160,14 @@ fn check_stage(method: Method) {
     let feed = 2 * 256;
     let warm = 2 * rate as usize;
     for chunk in stereo[..warm].chunks(feed) {
-        producer.push_partial_slice(chunk);
+        let (_, rest) = producer.push_partial_slice(chunk);
+        assert!(rest.is_empty(), "the ring holds a block");
         stage.poll(false);
     }
     let n = allocations_in(|| {
         for chunk in stereo[warm..].chunks(feed) {
-            producer.push_partial_slice(chunk);
+            let (_, rest) = producer.push_partial_slice(chunk);
+            assert!(rest.is_empty(), "the ring holds a block");
             while stage.poll(false) > 0 {}
         }
     });

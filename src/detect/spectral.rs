@@ -660,48 +660,35 @@ impl SpectralMatcher {
             .map(|n| f64::from(self.sample(n)).powi(2))
             .sum();
         let strength = (early / template.early_energy.max(1e-12)).sqrt();
-        let emitted_at = self.consumed as f64 / self.rate;
-        match info.kind {
-            PatternKind::Impulse => out.push(Event {
-                id: 0,
-                pattern: info.name.clone(),
-                kind: PatternKind::Impulse,
-                time: time_sample as f64 / self.rate,
-                end: None,
-                strength,
-                score: f64::from(best_score),
-                emitted_at,
-                pitch: None,
-            }),
-            PatternKind::Continuous => {
-                if let Some(h) = self.held.take() {
-                    self.close_held(h, out);
-                }
-                let loudest = (onset_frame..self.frame_count)
-                    .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
-                    .fold(f32::NEG_INFINITY, f32::max);
-                self.held = Some(Held {
-                    pattern: pi,
-                    begin_sample: time_sample,
-                    loudest_db: loudest,
-                    last_good_frame: self.frame_count - 1,
-                    score: best_score,
-                });
-                // The begin marker: the daemon sends it at once; the detector keeps
-                // it only for callers that asked for begins.
-                out.push(Event {
-                    id: 0,
-                    pattern: self.patterns[pi].name.clone(),
-                    kind: PatternKind::Continuous,
-                    time: time_sample as f64 / self.rate,
-                    end: None,
-                    strength,
-                    score: f64::from(best_score),
-                    emitted_at,
-                    pitch: None,
-                });
+        // The impulse, or the begin marker of a held sound (the daemon sends it at
+        // once; the detector keeps it only for callers that asked for begins).
+        let decided = Event {
+            id: 0,
+            pattern: info.name.clone(),
+            kind: info.kind,
+            time: time_sample as f64 / self.rate,
+            end: None,
+            strength,
+            score: f64::from(best_score),
+            emitted_at: self.consumed as f64 / self.rate,
+            pitch: None,
+        };
+        if info.kind == PatternKind::Continuous {
+            if let Some(h) = self.held.take() {
+                self.close_held(h, out);
             }
+            let loudest = (onset_frame..self.frame_count)
+                .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
+                .fold(f32::NEG_INFINITY, f32::max);
+            self.held = Some(Held {
+                pattern: pi,
+                begin_sample: time_sample,
+                loudest_db: loudest,
+                last_good_frame: self.frame_count - 1,
+                score: best_score,
+            });
         }
+        out.push(decided);
     }
 
     fn follow_held(&mut self, f: u64, out: &mut Vec<Event>) {

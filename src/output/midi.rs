@@ -150,29 +150,13 @@ impl MidiSink {
         };
         let (note, channel) = (m.note, m.channel);
         let velocity = self.settings.velocity(e.strength);
+        let gate = Some(now + Duration::from_secs_f64(self.settings.gate_seconds));
         match (e.kind, e.end) {
             (PatternKind::Impulse, _) => {
-                self.release_matching(|s| s.note == note && s.channel == channel);
-                self.note_on(note, channel, velocity);
-                self.sounding.push(SoundingNote {
-                    note,
-                    channel,
-                    event: e.id,
-                    off_at: Some(now + Duration::from_secs_f64(self.settings.gate_seconds)),
-                });
+                self.start_note(note, channel, velocity, e.id, gate, false)
             }
             (PatternKind::Continuous, None) => {
-                self.release_matching(|s| s.note == note && s.channel == channel);
-                if let Some(cc) = self.settings.strength_cc {
-                    self.send(&[0xB0 | (channel - 1), cc, velocity.min(127)]);
-                }
-                self.note_on(note, channel, velocity);
-                self.sounding.push(SoundingNote {
-                    note,
-                    channel,
-                    event: e.id,
-                    off_at: None,
-                });
+                self.start_note(note, channel, velocity, e.id, None, true)
             }
             (PatternKind::Continuous, Some(_)) => {
                 let id = e.id;
@@ -180,20 +164,35 @@ impl MidiSink {
                     self.release_matching(|s| s.event == id);
                 } else {
                     // Begin and end decided together (waveform method): play it gated.
-                    self.release_matching(|s| s.note == note && s.channel == channel);
-                    if let Some(cc) = self.settings.strength_cc {
-                        self.send(&[0xB0 | (channel - 1), cc, velocity.min(127)]);
-                    }
-                    self.note_on(note, channel, velocity);
-                    self.sounding.push(SoundingNote {
-                        note,
-                        channel,
-                        event: id,
-                        off_at: Some(now + Duration::from_secs_f64(self.settings.gate_seconds)),
-                    });
+                    self.start_note(note, channel, velocity, id, gate, true);
                 }
             }
         }
+    }
+
+    /// Plays a note for `event`, releasing first the same note if it still sounds; held
+    /// sounds send the strength control change first. `off_at`: when the gate closes
+    /// (`None`: held until its end).
+    fn start_note(
+        &mut self,
+        note: u8,
+        channel: u8,
+        velocity: u8,
+        event: u64,
+        off_at: Option<Instant>,
+        held: bool,
+    ) {
+        self.release_matching(|s| s.note == note && s.channel == channel);
+        if let (true, Some(cc)) = (held, self.settings.strength_cc) {
+            self.send(&[0xB0 | (channel - 1), cc, velocity.min(127)]);
+        }
+        self.note_on(note, channel, velocity);
+        self.sounding.push(SoundingNote {
+            note,
+            channel,
+            event,
+            off_at,
+        });
     }
 
     fn release_matching(&mut self, hit: impl Fn(&SoundingNote) -> bool) {
