@@ -18,6 +18,7 @@ packages=(
   liblo-tools                            # oscdump, an independent OSC receiver
   jackd2 jack-tools                      # MIDI through JACK, jack_midi_dump
   coreutils                              # stdbuf
+  puredata-core                          # the Pure Data recipe, run headless
 )
 bash scripts/install-packages.sh "${packages[@]}"
 
