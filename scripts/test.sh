@@ -19,6 +19,7 @@ packages=(
   jackd2 jack-tools                      # MIDI through JACK, jack_midi_dump
   coreutils                              # stdbuf
   puredata-core                          # the Pure Data recipe, run headless
+  librsvg2-bin                           # rsvg-convert renders the plot in a test
 )
 bash scripts/install-packages.sh "${packages[@]}"
 

@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::Config;
+use crate::detect::waveform::TakeTrace;
 use crate::detect::{DetectError, Detector, Event};
 use crate::pattern::{self, PatternError};
 use crate::solver::{self, Contact};
@@ -37,17 +38,42 @@ pub struct Analysis {
     /// Length of the recording, seconds.
     pub duration: f64,
     pub sample_rate: u32,
+    /// Each take's match score over time, when asked for (waveform method).
+    pub score_traces: Option<Vec<TakeTrace>>,
+    /// The match threshold of each pattern, by name.
+    pub thresholds: Vec<(std::sync::Arc<str>, f64)>,
+    /// The detector's working rate (of the score traces).
+    pub working_rate: u32,
 }
 
 /// Detects `config`'s patterns in the WAV file `recording`.
 pub fn analyze_file(recording: &Path, config: &Config) -> Result<Analysis, AnalyzeError> {
+    analyze_file_with(recording, config, false, &mut |_| {})
+}
+
+/// [`analyze_file`], keeping the match scores for a plot when `keep_scores` is set;
+/// `progress` is called with the fraction of the file read so far.
+pub fn analyze_file_with(
+    recording: &Path,
+    config: &Config,
+    keep_scores: bool,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Analysis, AnalyzeError> {
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let thresholds = patterns
+        .iter()
+        .map(|p| (p.name.clone(), p.threshold))
+        .collect();
     let select = config
         .detector
         .channel
         .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let mut source = WavSource::open(recording, select).map_err(AnalyzeError::Recording)?;
     let mut detector = Detector::new(patterns, &config.detector, source.sample_rate())?;
+    if keep_scores {
+        detector.enable_score_trace();
+    }
+    let total = source.frames_total().max(1);
     let mut events = Vec::new();
     let mut block = Vec::with_capacity(READ_BLOCK_FRAMES);
     let mut frames = 0u64;
@@ -60,6 +86,7 @@ pub fn analyze_file(recording: &Path, config: &Config) -> Result<Analysis, Analy
         }
         frames += n as u64;
         detector.process(&block, &mut events);
+        progress(frames as f64 / total as f64);
     }
     if frames == 0 {
         return Err(AnalyzeError::EmptyRecording(recording.to_path_buf()));
@@ -75,6 +102,9 @@ pub fn analyze_file(recording: &Path, config: &Config) -> Result<Analysis, Analy
         events,
         duration: frames as f64 / f64::from(source.sample_rate()),
         sample_rate: source.sample_rate(),
+        score_traces: detector.take_score_trace(),
+        thresholds,
+        working_rate: config.detector.sample_rate,
     })
 }
 

@@ -178,6 +178,9 @@ pub struct AnalyzeArgs {
     /// Gravity for --bounce, m/s² (overrides the config).
     #[arg(long)]
     pub gravity: Option<f64>,
+    /// Also draw the waveform, each pattern's match score and the events as an SVG.
+    #[arg(long, value_name = "OUT.svg")]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -244,7 +247,18 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         bounce.gravity = g;
         config.bounce = Some(bounce);
     }
-    let analysis = analyze::analyze_file(&args.recording, &config)?;
+    let analysis =
+        analyze::analyze_file_with(&args.recording, &config, args.plot.is_some(), &mut |_| {})?;
+    if let Some(path) = &args.plot {
+        let select = config.detector.channel.map_or(
+            crate::audio::ChannelSelect::Mix,
+            crate::audio::ChannelSelect::Index,
+        );
+        let samples = crate::audio::WavSource::open(&args.recording, select)
+            .and_then(|mut s| s.read_all())
+            .map_err(analyze::AnalyzeError::Recording)?;
+        crate::plot::write_svg(path, &samples, &analysis)?;
+    }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match args.format {

@@ -17,6 +17,7 @@ pub mod eval;
 pub mod live_bounce;
 pub mod output;
 pub mod pattern;
+pub mod plot;
 pub mod solver;
 
 pub use config::{Config, DetectorSettings, Method, PatternKind};

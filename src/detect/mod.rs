@@ -220,6 +220,14 @@ impl Detector {
         }
     }
 
+    /// Hands over the recorded match scores (see [`Detector::score_trace`]).
+    pub fn take_score_trace(&mut self) -> Option<Vec<waveform::TakeTrace>> {
+        match &mut self.matcher {
+            Matcher::Waveform(m) => m.take_score_trace(),
+            Matcher::Spectral(_) => None,
+        }
+    }
+
     /// The recorded match scores: one curve per take, at the working rate.
     pub fn score_trace(&self) -> Option<&[waveform::TakeTrace]> {
         match &self.matcher {

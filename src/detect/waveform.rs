@@ -313,6 +313,10 @@ impl WaveformMatcher {
         }
     }
 
+    pub fn take_score_trace(&mut self) -> Option<Vec<TakeTrace>> {
+        self.trace.take()
+    }
+
     pub fn score_trace(&self) -> Option<&[TakeTrace]> {
         self.trace.as_deref()
     }
