@@ -43,6 +43,34 @@ pub enum Command {
     Listen(ListenArgs),
     /// List audio inputs and MIDI output ports.
     Devices,
+    /// Enrol a pattern: record takes of it (from the microphone, or a file), cut each to
+    /// the sound, save them beside the config and add the pattern to the config.
+    Record(RecordArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RecordArgs {
+    /// The pattern's name (letters, digits, '_' or '-').
+    pub name: String,
+    /// How many takes to record.
+    #[arg(long, default_value_t = 3)]
+    pub takes: usize,
+    /// The config to add the pattern to; the takes are saved beside it.
+    #[arg(long, short = 'c', value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// A held sound ("chhh", "hooo") rather than an impulse.
+    #[arg(long)]
+    pub continuous: bool,
+    /// Take the takes from this WAV file (its sounds, separated by silence) instead of
+    /// the microphone.
+    #[arg(long, value_name = "FILE.wav")]
+    pub input: Option<PathBuf>,
+    /// Audio input device: its name or part of it (overrides the config).
+    #[arg(long, value_name = "NAME")]
+    pub device: Option<String>,
+    /// Where to save the takes without --config.
+    #[arg(long, default_value = ".", value_name = "DIR")]
+    pub dir: PathBuf,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -348,6 +376,37 @@ fn run_listen(args: &ListenArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
+    if !(1..=20).contains(&args.takes) {
+        anyhow::bail!("--takes must be from 1 to 20, found {}", args.takes);
+    }
+    let config = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => Config::default(),
+    };
+    let mut input_settings = config.input.clone();
+    if let Some(d) = &args.device {
+        input_settings.device = Some(d.clone());
+    }
+    let options = crate::record::RecordOptions {
+        name: args.name.clone(),
+        kind: if args.continuous {
+            config::PatternKind::Continuous
+        } else {
+            config::PatternKind::Impulse
+        },
+        takes: args.takes,
+        config: args.config.clone(),
+        dir: args.dir.clone(),
+        input: args.input.clone(),
+        max_seconds: config.detector.max_pattern_seconds,
+        input_settings,
+    };
+    let mut err = std::io::stderr().lock();
+    crate::record::record(&options, &mut err)?;
+    Ok(())
+}
+
 fn run_devices() -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
@@ -406,6 +465,7 @@ pub fn main() -> ExitCode {
         Command::Eval(args) => run_eval(args),
         Command::Listen(args) => run_listen(args),
         Command::Devices => run_devices(),
+        Command::Record(args) => run_record(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

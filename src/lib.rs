@@ -18,6 +18,7 @@ pub mod live_bounce;
 pub mod output;
 pub mod pattern;
 pub mod plot;
+pub mod record;
 pub mod solver;
 
 pub use config::{Config, DetectorSettings, Method, PatternKind};

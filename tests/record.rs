@@ -1,0 +1,176 @@
+//! `onomato record --input`: a file with silence, a good take, a clipped take and a
+//! take that is too long gives exactly the good take, trimmed, and the two refusals;
+//! the config gets the pattern and keeps its comments and layout.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+mod common;
+use common::*;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+const CONFIG: &str = r#"# My voice.
+# A comment that must survive.
+
+[detector]
+threshold = 0.5   # kept as written
+
+[[pattern]]
+name = "tick"
+# tick comes first
+takes = ["TICK"]
+"#;
+
+#[test]
+fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_config() {
+    let dir = temp_dir("record");
+    let rate = 22_050;
+    let mut rec = vec![0.0f32; samples_for(9.0, rate)];
+    place(
+        &mut rec,
+        &buzz(rate, 0.2, 160.0),
+        samples_for(0.5, rate),
+        0.5,
+    );
+    let mut clipped = buzz(rate, 0.2, 160.0);
+    for x in &mut clipped {
+        *x = (*x * 3.0).clamp(-1.0, 1.0);
+    }
+    place(&mut rec, &clipped, samples_for(1.4, rate), 1.0);
+    place(
+        &mut rec,
+        &buzz(rate, 6.0, 160.0),
+        samples_for(2.3, rate),
+        0.3,
+    );
+    add_noise(&mut rec, 0.0003, 5);
+    let input = dir.join("takes.wav");
+    write_wav_f32(&input, &rec, rate);
+    let config = dir.join("voice.toml");
+    let tick = root().join("examples/patterns/tick.wav");
+    let original = CONFIG.replace("TICK", &tick.to_string_lossy());
+    std::fs::write(&config, &original).unwrap();
+
+    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["record", "hum", "--continuous", "--takes", "3", "--config"])
+        .arg(&config)
+        .arg("--input")
+        .arg(&input)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{log}");
+    // Where each sound was found: "a-b s", within 30 ms of where it was placed.
+    let span_after = |prefix: &str| -> (f64, f64) {
+        let rest = log
+            .split(prefix)
+            .nth(1)
+            .unwrap_or_else(|| panic!("no '{prefix}' in {log}"));
+        let (a, rest) = rest.split_once('-').unwrap();
+        let b = rest.split(" s").next().unwrap();
+        (a.trim().parse().unwrap(), b.parse().unwrap())
+    };
+    let near = |x: f64, y: f64| (x - y).abs() < 0.03;
+    let (a, b) = span_after("take 1: ");
+    assert!(near(a, 0.5) && near(b, 0.7), "take at {a}-{b}: {log}");
+    let clipped_line = log
+        .lines()
+        .find(|l| l.contains("clipped at"))
+        .expect("a clipped refusal");
+    let (a, b) = span_after("refused the sound at ");
+    assert!(near(a, 1.4) && near(b, 1.6), "{clipped_line}");
+    let long_line = log
+        .lines()
+        .find(|l| l.contains("more than max_pattern_seconds (5 s)"))
+        .expect("a too-long refusal");
+    assert!(long_line.contains("6.0"), "{long_line}");
+    assert_eq!(log.matches("refused").count(), 2, "{log}");
+    assert!(
+        log.contains("1 of the 3 takes asked for were found"),
+        "{log}"
+    );
+
+    // Exactly one take, trimmed to the sound (0.2 s and 10 ms either side).
+    let saved = dir.join("hum-1.wav");
+    let reader = hound::WavReader::open(&saved).unwrap();
+    let seconds = reader.duration() as f64 / f64::from(reader.spec().sample_rate);
+    assert!((seconds - 0.22).abs() < 0.02, "take is {seconds} s");
+    assert!(!dir.join("hum-2.wav").exists());
+
+    // The config: everything that was there, as it was, and the new pattern.
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(
+        text.starts_with(&original),
+        "the config was rewritten:\n{text}"
+    );
+    let tail = &text[original.len()..];
+    assert!(
+        tail.contains("name = \"hum\"") && tail.contains("kind = \"continuous\""),
+        "{tail}"
+    );
+    assert!(tail.contains("takes = [\"hum-1.wav\"]"), "{tail}");
+    let check = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["check", "--config"])
+        .arg(&config)
+        .output()
+        .unwrap();
+    assert!(
+        check.status.success(),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+
+    // Recording it again replaces its takes; it does not add a second 'hum'.
+    let again = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["record", "hum", "--continuous", "--takes", "1", "--config"])
+        .arg(&config)
+        .arg("--input")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert_eq!(text.matches("name = \"hum\"").count(), 1, "{text}");
+    assert!(
+        text.contains("# tick comes first") && text.contains("threshold = 0.5   # kept as written")
+    );
+}
+
+#[test]
+fn a_file_without_a_usable_take_is_an_error_and_the_config_is_untouched() {
+    let dir = temp_dir("record-none");
+    let rate = 22_050;
+    let mut rec = vec![0.0f32; samples_for(3.0, rate)];
+    add_noise(&mut rec, 0.0003, 6);
+    let input = dir.join("silence.wav");
+    write_wav_f32(&input, &rec, rate);
+    let config = dir.join("voice.toml");
+    let tick = root().join("examples/patterns/tick.wav");
+    let original = CONFIG.replace("TICK", &tick.to_string_lossy());
+    std::fs::write(&config, &original).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["record", "hum", "--config"])
+        .arg(&config)
+        .arg("--input")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        log.contains("no usable take of 'hum' was found in the input file"),
+        "{log}"
+    );
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), original);
+    // A bad name is refused before anything is read.
+    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["record", "my hum", "--input"])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("found 'my hum'"));
+}
