@@ -385,6 +385,9 @@ fn record_from_microphone(
         let started = Instant::now();
         let mut last_sound: Option<Instant> = None;
         let mut frame = vec![0.0f32; 1024 * channels];
+        // The level shown ten times a second: the loudest since the last.
+        let mut shown_peak = -120.0f64;
+        let mut last_shown = Instant::now();
         while started.elapsed().as_secs_f64() < window {
             let frames = (consumer.slots() / channels).min(1024);
             if frames == 0 {
@@ -398,9 +401,18 @@ fn record_from_microphone(
                 .collect();
             let peak = block.iter().fold(0.0f32, |m, x| m.max(x.abs()));
             let db = 20.0 * f64::from(peak.max(1e-6)).log10();
-            let bars = (((db + 60.0) / 60.0).clamp(0.0, 1.0) * 30.0) as usize;
-            let _ = write!(err, "\r  level {:<30} {db:6.1} dB", "#".repeat(bars));
-            let _ = err.flush();
+            shown_peak = shown_peak.max(db);
+            if last_shown.elapsed() >= Duration::from_millis(100) {
+                let bars = (((shown_peak + 60.0) / 60.0).clamp(0.0, 1.0) * 30.0) as usize;
+                let _ = write!(
+                    err,
+                    "\r  level {:<30} {shown_peak:6.1} dB",
+                    "#".repeat(bars)
+                );
+                let _ = err.flush();
+                last_shown = Instant::now();
+                shown_peak = -120.0;
+            }
             if db > SILENCE_DBFS + 15.0 {
                 last_sound = Some(Instant::now());
             }

@@ -707,6 +707,71 @@ fn the_daemon_outlives_a_crash_of_the_sound_server_and_captures_again() {
 }
 
 #[test]
+fn record_takes_sounds_from_the_microphone_and_asks_again_after_a_clipped_one() {
+    let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = common::temp_dir("record-pulse");
+    let pulse = Pulse::start(&dir);
+    let rate = 44_100;
+    let mut good = vec![0.0f32; common::samples_for(0.2, rate)];
+    good.extend(common::buzz(rate, 0.3, 170.0).iter().map(|x| x * 0.5));
+    good.extend(vec![0.0f32; common::samples_for(0.2, rate)]);
+    let clipped: Vec<f32> = good.iter().map(|x| (x * 6.0).clamp(-1.0, 1.0)).collect();
+    // Stereo, both channels alike: the sink is stereo, and a mono file would reach the
+    // capture at another level.
+    let stereo = |x: &[f32]| x.iter().map(|&v| vec![v, v]).collect::<Vec<_>>();
+    let good_wav = dir.join("good.wav");
+    let clipped_wav = dir.join("clipped.wav");
+    common::write_wav_int(&good_wav, &stereo(&good), rate, 16);
+    common::write_wav_int(&clipped_wav, &stereo(&clipped), rate, 16);
+    let takes = dir.join("takes");
+    fs::create_dir_all(&takes).unwrap();
+    let log = dir.join("record.err");
+    let mut cmd = Command::new(BIN);
+    cmd.args(["record", "hum", "--takes", "2", "--dir"])
+        .arg(&takes)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(fs::File::create(&log).unwrap());
+    let mut child = pulse.env(&mut cmd).spawn().unwrap();
+    let play = |wav: &Path| {
+        pulse.play(&wav.to_string_lossy());
+    };
+    let wait_count = |text: &str, n: usize| {
+        let start = Instant::now();
+        while read(&log).matches(text).count() < n {
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "no '{text}' ×{n}: {}",
+                read(&log)
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    wait_count("take 1 of 2: now!", 1);
+    play(&good_wav);
+    wait_count("take 2 of 2: now!", 1);
+    play(&clipped_wav);
+    wait_count("refused: clipped", 1);
+    wait_count("take 2 of 2: now!", 2);
+    play(&good_wav);
+    let status = wait_exit(&mut child, Duration::from_secs(20));
+    let text = read(&log);
+    assert!(status.success(), "{text}");
+    assert!(text.contains("level"), "no live level: {text}");
+    for k in 1..=2 {
+        let path = takes.join(format!("hum-{k}.wav"));
+        let r = hound::WavReader::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let seconds = r.duration() as f64 / f64::from(r.spec().sample_rate);
+        assert!(
+            (seconds - 0.32).abs() < 0.03,
+            "take {k} is {seconds} s: {text}"
+        );
+    }
+    assert!(!takes.join("hum-3.wav").exists());
+    assert!(text.contains("--pattern hum="), "{text}");
+}
+
+#[test]
 fn an_unreachable_osc_target_does_not_stop_the_daemon() {
     let dir = common::temp_dir("listen-unreachable");
     let osc = OscDump::start(&dir);
