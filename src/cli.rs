@@ -275,8 +275,27 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         bounce.gravity = g;
         config.bounce = Some(bounce);
     }
+    // A progress bar on stderr, for long files in a terminal only (indicatif hides it
+    // when stderr is not a terminal).
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(1000),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "analysing {bar:40} {percent:>3}%  {elapsed} (about {eta} left)",
+    ) {
+        bar.set_style(style);
+    }
+    let started = std::time::Instant::now();
     let analysis =
-        analyze::analyze_file_with(&args.recording, &config, args.plot.is_some(), &mut |_| {})?;
+        analyze::analyze_file_with(&args.recording, &config, args.plot.is_some(), &mut |done| {
+            // Short analyses finish before a bar would help.
+            if started.elapsed() > std::time::Duration::from_millis(300) {
+                bar.set_position((done * 1000.0) as u64);
+            }
+        });
+    bar.finish_and_clear();
+    let analysis = analysis?;
     if let Some(path) = &args.plot {
         let select = config.detector.channel.map_or(
             crate::audio::ChannelSelect::Mix,

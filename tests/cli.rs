@@ -488,3 +488,85 @@ fn devices_lists_audio_inputs_and_midi_ports() {
         "{out}"
     );
 }
+
+#[test]
+fn analyze_shows_a_progress_bar_in_a_terminal_and_nothing_otherwise() {
+    // Ten minutes of audio: the example sixty times.
+    let dir = std::env::temp_dir().join(format!("onomato-cli-progress-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut reader = hound::WavReader::open(root().join("examples/beat.wav")).unwrap();
+    let spec = reader.spec();
+    let samples: Vec<i16> = reader.samples::<i16>().map(Result::unwrap).collect();
+    let long = dir.join("long.wav");
+    let mut w = hound::WavWriter::create(&long, spec).unwrap();
+    for _ in 0..60 {
+        for &s in &samples {
+            w.write_sample(s).unwrap();
+        }
+    }
+    w.finalize().unwrap();
+    let command = format!(
+        "{} analyze {} -c config/onomato.toml > /dev/null",
+        env!("CARGO_BIN_EXE_onomato"),
+        long.display()
+    );
+    // `script` runs it with a terminal for stdin, stdout and stderr.
+    let in_terminal = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .current_dir(root())
+        .output()
+        .expect("script (util-linux)");
+    assert!(in_terminal.status.success());
+    let shown = String::from_utf8_lossy(&in_terminal.stdout);
+    assert!(
+        shown.contains("analysing") && shown.contains('%'),
+        "{shown}"
+    );
+    let piped = onomato(&[
+        "analyze",
+        &long.to_string_lossy(),
+        "-c",
+        "config/onomato.toml",
+    ]);
+    assert!(piped.status.success());
+    assert_eq!(stderr(&piped), "", "no bar when stderr is not a terminal");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn listen_in_a_terminal_prints_events_and_a_level_and_as_a_service_only_logs() {
+    let command = format!(
+        "{} listen -c config/onomato.toml --input examples/beat.wav --speed 8",
+        env!("CARGO_BIN_EXE_onomato")
+    );
+    let in_terminal = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .current_dir(root())
+        .output()
+        .expect("script (util-linux)");
+    assert!(in_terminal.status.success());
+    let shown = String::from_utf8_lossy(&in_terminal.stdout);
+    assert!(
+        shown.contains("  input #") && shown.contains(" dB "),
+        "no level: {shown}"
+    );
+    assert_eq!(shown.matches(" impulse ").count(), 11, "{shown}");
+    // As a service (stdout and stderr not terminals): no events and no level on stdout,
+    // only logs on stderr.
+    let service = onomato(&[
+        "listen",
+        "-c",
+        "config/onomato.toml",
+        "--input",
+        "examples/beat.wav",
+        "--speed",
+        "8",
+    ]);
+    assert!(service.status.success());
+    assert_eq!(stdout(&service), "");
+    let log = stderr(&service);
+    assert!(
+        log.contains("listening") && !log.contains(" input #"),
+        "{log}"
+    );
+}

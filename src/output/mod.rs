@@ -131,9 +131,18 @@ pub fn run(
     let mut open: Vec<Event> = Vec::with_capacity(16);
     let mut next_heartbeat = Instant::now();
     let stdout = std::io::stdout();
+    // In a terminal, a compact input level under the printed events.
+    let meter = {
+        use std::io::IsTerminal;
+        settings.print == PrintMode::Text && std::io::stderr().is_terminal()
+    };
+    let mut next_meter = Instant::now();
     loop {
         let now = Instant::now();
         let mut wake = now + Duration::from_millis(250);
+        if meter {
+            wake = wake.min(next_meter);
+        }
         if let Some(t) = sinks.midi.as_ref().and_then(MidiSink::next_deadline) {
             wake = wake.min(t);
         }
@@ -161,6 +170,9 @@ pub fn run(
                     }
                     _ => false,
                 };
+                if meter {
+                    clear_meter();
+                }
                 print_event(&mut stdout.lock(), &e, begin_sent, sinks.print);
                 if let Some(o) = sinks.osc.as_mut() {
                     o.send_event(&e, begin_sent);
@@ -195,6 +207,9 @@ pub fn run(
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
+                if meter {
+                    clear_meter();
+                }
                 // The states the delay held back, up to the end of the stream.
                 if sinks.states_wanted() {
                     let Sinks { bounce, osc, .. } = &mut sinks;
@@ -209,6 +224,10 @@ pub fn run(
             Err(RecvTimeoutError::Timeout) => {}
         }
         let now = Instant::now();
+        if meter && now >= next_meter {
+            next_meter = now + Duration::from_millis(100);
+            draw_meter(status.level_db(), status.stream_seconds(), report.events);
+        }
         if let Some(m) = sinks.midi.as_mut() {
             m.release_due(now);
         }
@@ -267,6 +286,24 @@ fn collect(sinks: &Sinks, report: &mut OutputReport) {
     if let Some(b) = &sinks.bounce {
         report.late_bounce_hits += b.late_hits();
     }
+}
+
+/// The input level line on stderr: `input ####------  -23 dB   12.3 s  4 events`.
+fn draw_meter(level_db: f32, stream_seconds: f64, events: u64) {
+    let filled = (((level_db + 60.0) / 60.0).clamp(0.0, 1.0) * 20.0) as usize;
+    let bar: String = "#".repeat(filled) + &"-".repeat(20 - filled);
+    let mut err = std::io::stderr().lock();
+    let _ = write!(
+        err,
+        "\r\x1b[K  input {bar} {level_db:6.1} dB  {stream_seconds:8.1} s  {events} events"
+    );
+    let _ = err.flush();
+}
+
+fn clear_meter() {
+    let mut err = std::io::stderr().lock();
+    let _ = write!(err, "\r\x1b[K");
+    let _ = err.flush();
 }
 
 /// Prints one event; a closed stdout (a pipe whose reader left) is ignored.
