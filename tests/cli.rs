@@ -19,6 +19,22 @@ fn onomato(args: &[&str]) -> Output {
         .expect("run onomato")
 }
 
+/// Each command exits 1, says what is wrong on stderr (no panic), prints nothing on
+/// stdout.
+fn assert_each_fails_with(cases: &[(&[&str], &str)]) {
+    for (args, wanted) in cases {
+        let out = onomato(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains(wanted),
+            "{args:?}: expected {wanted:?} in {}",
+            stderr(&out)
+        );
+        assert!(stdout(&out).is_empty(), "{args:?} printed on stdout");
+        assert!(!stderr(&out).contains("panicked"), "{args:?}");
+    }
+}
+
 fn stdout(o: &Output) -> String {
     String::from_utf8(o.stdout.clone()).expect("utf-8 stdout")
 }
@@ -322,17 +338,7 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
             "cannot read config 'config/missing.toml'",
         ),
     ];
-    for (args, wanted) in cases {
-        let out = onomato(args);
-        assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
-        assert!(
-            stderr(&out).contains(wanted),
-            "{args:?}: expected {wanted:?} in {}",
-            stderr(&out)
-        );
-        assert!(stdout(&out).is_empty(), "{args:?} printed on stdout");
-        assert!(!stderr(&out).contains("panicked"), "{args:?}");
-    }
+    assert_each_fails_with(cases);
 }
 
 #[test]
@@ -433,16 +439,7 @@ fn listen_mistakes_are_named_and_exit_1() {
             "no patterns to detect",
         ),
     ];
-    for (args, wanted) in cases {
-        let o = onomato(args);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
-        assert!(
-            stderr(&o).contains(wanted),
-            "{args:?}: expected {wanted:?} in {}",
-            stderr(&o)
-        );
-        assert!(stdout(&o).is_empty(), "{args:?}");
-    }
+    assert_each_fails_with(cases);
     // --speed without --input is a usage error.
     let o = onomato(&["listen", "-c", "config/onomato.toml", "--speed", "2"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

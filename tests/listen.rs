@@ -805,29 +805,23 @@ fn an_unreachable_osc_target_does_not_stop_the_daemon() {
     check_example_osc(&osc.messages(), Some(0.0));
 }
 
+/// A `[[pattern]]` of the example's patterns, with its take's absolute path and any
+/// `extra` lines.
+fn example_pattern(name: &str, extra: &str) -> String {
+    let take = root().join("examples/patterns").join(format!("{name}.wav"));
+    format!(
+        "[[pattern]]\nname = \"{name}\"\ntakes = [\"{}\"]\n{extra}\n",
+        take.display()
+    )
+}
+
 fn write_config(path: &Path, prefix: &str, threshold: &str, osc: &str) {
-    let patterns = root().join("examples/patterns");
+    let patterns: String = ["tick", "pop", "boom"]
+        .iter()
+        .map(|n| example_pattern(n, ""))
+        .collect();
     let text = format!(
-        r#"[detector]
-threshold = {threshold}
-
-[[pattern]]
-name = "tick"
-takes = ["{p}/tick.wav"]
-
-[[pattern]]
-name = "pop"
-takes = ["{p}/pop.wav"]
-
-[[pattern]]
-name = "boom"
-takes = ["{p}/boom.wav"]
-
-[osc]
-targets = ["{osc}"]
-prefix = "{prefix}"
-"#,
-        p = patterns.display()
+        "[detector]\nthreshold = {threshold}\n\n{patterns}\n[osc]\ntargets = [\"{osc}\"]\nprefix = \"{prefix}\"\n"
     );
     fs::write(path, text).unwrap();
 }
@@ -905,32 +899,16 @@ fn sighup_reloads_a_good_config_and_keeps_the_old_one_when_the_new_one_is_broken
 fn bounce_hits_states_and_status_reach_osc() {
     let dir = common::temp_dir("listen-bounce");
     let osc = OscDump::start(&dir);
-    let p = root().join("examples/patterns");
     let config = dir.join("bounce.toml");
+    let patterns: String = ["tick", "boom", "pop"]
+        .iter()
+        .map(|n| example_pattern(n, ""))
+        .collect();
     fs::write(
         &config,
         format!(
-            r#"[[pattern]]
-name = "tick"
-takes = ["{p}/tick.wav"]
-[[pattern]]
-name = "boom"
-takes = ["{p}/boom.wav"]
-[[pattern]]
-name = "pop"
-takes = ["{p}/pop.wav"]
-
-[osc]
-targets = ["{target}"]
-heartbeat_seconds = 0.5
-bounce_state_rate = 100
-
-[bounce]
-hard = ["tick", "boom"]
-soft = ["pop"]
-"#,
-            p = p.display(),
-            target = osc.target()
+            "{patterns}\n[osc]\ntargets = [\"{}\"]\nheartbeat_seconds = 0.5\nbounce_state_rate = 100\n\n[bounce]\nhard = [\"tick\", \"boom\"]\nsoft = [\"pop\"]\n",
+            osc.target()
         ),
     )
     .unwrap();
@@ -990,14 +968,13 @@ soft = ["pop"]
 fn bundles_carry_the_onset_as_their_timetag() {
     let dir = common::temp_dir("listen-bundle");
     let osc = OscDump::start(&dir);
-    let p = root().join("examples/patterns");
     let config = dir.join("bundle.toml");
     fs::write(
         &config,
         format!(
-            "[[pattern]]\nname = \"tick\"\ntakes = [\"{p}/tick.wav\"]\n\n[osc]\ntargets = [\"{t}\"]\nbundle = true\n",
-            p = p.display(),
-            t = osc.target()
+            "{}\n[osc]\ntargets = [\"{}\"]\nbundle = true\n",
+            example_pattern("tick", ""),
+            osc.target()
         ),
     )
     .unwrap();
