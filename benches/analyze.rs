@@ -179,8 +179,7 @@ fn bench_analyze_file(c: &mut Criterion) {
                 name: name.clone(),
                 kind: PatternKind::Impulse,
                 takes: vec![path],
-                threshold: None,
-                continuous_threshold: None,
+                ..PatternSpec::default()
             }
         })
         .collect();

@@ -23,4 +23,6 @@ packages=(
 )
 bash scripts/install-packages.sh "${packages[@]}"
 
-cargo test --release --locked --features jack
+# --all-targets: the benchmarks and examples are built and run once too, so they
+# cannot rot.
+cargo test --release --locked --features jack --all-targets

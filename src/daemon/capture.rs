@@ -163,7 +163,7 @@ pub fn open_capture(
     };
     let new_ring = || RingBuffer::<f32>::new(ring_samples(settings.ring_seconds, rate, channels));
     let (producer, consumer) = new_ring();
-    let (stream, consumer) = match build(config.clone(), producer) {
+    let (stream, consumer) = match build(config, producer) {
         Ok(s) => (s, consumer),
         Err(fixed) => {
             // Some devices refuse a fixed buffer size: take theirs rather than nothing.
