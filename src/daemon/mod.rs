@@ -503,6 +503,7 @@ pub fn listen(
     drop(control_tx);
 
     tracing::info!(patterns = config.patterns.len(), rate, "listening");
+    let mut failure: Option<&str> = None;
     loop {
         let message = match control_rx.recv_timeout(Duration::from_secs(1)) {
             Ok(m) => Some(m),
@@ -543,6 +544,14 @@ pub fn listen(
                 }
             }
             None => {}
+        }
+        // A detector or output thread that ended on its own has failed (a bug): stop,
+        // and exit with an error so that a service manager restarts the daemon.
+        if !input_done.load(Ordering::Acquire)
+            && (detector_thread.is_finished() || output_thread.is_finished())
+        {
+            failure = Some("the detector or output thread stopped unexpectedly");
+            break;
         }
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
@@ -598,6 +607,9 @@ pub fn listen(
         note_offs = report.output.midi.note_offs,
         "stopped"
     );
+    if let Some(why) = failure {
+        anyhow::bail!("{why}; see the log above");
+    }
     Ok(report)
 }
 
