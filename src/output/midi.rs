@@ -15,6 +15,13 @@ use midir::{MidiOutput, MidiOutputConnection};
 use crate::config::{MidiPortChoice, MidiSettings, PatternKind, PatternSpec};
 use crate::detect::Event;
 
+/// What MIDI needs on this build, for error messages.
+#[cfg(feature = "jack")]
+const BACKEND_HINT: &str = "this build sends MIDI through JACK: is a JACK server running?";
+#[cfg(not(feature = "jack"))]
+const BACKEND_HINT: &str =
+    "this build sends MIDI through the ALSA sequencer (/dev/snd/seq); build with --features jack for JACK";
+
 /// Client name the port is opened under.
 pub const CLIENT_NAME: &str = "onomato";
 const RETRY: Duration = Duration::from_secs(5);
@@ -69,6 +76,7 @@ pub struct MidiSink {
     sounding: Vec<SoundingNote>,
     counters: MidiCounters,
     last_sent: Option<Instant>,
+    open_failures: u64,
 }
 
 impl MidiSink {
@@ -81,6 +89,7 @@ impl MidiSink {
             sounding: Vec::with_capacity(64),
             counters: MidiCounters::default(),
             last_sent: None,
+            open_failures: 0,
         };
         sink.connect(Instant::now());
         sink
@@ -103,9 +112,15 @@ impl MidiSink {
             Ok(c) => {
                 tracing::info!(port = %describe(&self.settings.port), "MIDI output open");
                 self.connection = Some(c);
+                self.open_failures = 0;
             }
             Err(e) => {
-                tracing::warn!(port = %describe(&self.settings.port), error = %e, "cannot open MIDI output; retrying in 5 s");
+                // The first failure, then one a minute: a port that is away for hours
+                // must not flood the log.
+                self.open_failures += 1;
+                if self.open_failures % 12 == 1 {
+                    tracing::warn!(port = %describe(&self.settings.port), error = %e, attempts = self.open_failures, "cannot open MIDI output; retrying every 5 s");
+                }
             }
         }
     }
@@ -257,7 +272,8 @@ fn describe(port: &MidiPortChoice) -> String {
 
 /// Opens the configured port.
 fn open_port(choice: &MidiPortChoice) -> Result<MidiOutputConnection, String> {
-    let output = MidiOutput::new(CLIENT_NAME).map_err(|e| format!("MIDI is not available: {e}"))?;
+    let output = MidiOutput::new(CLIENT_NAME)
+        .map_err(|e| format!("MIDI is not available: {e} ({BACKEND_HINT})"))?;
     match choice {
         MidiPortChoice::Connect(wanted) => {
             let ports = output.ports();
