@@ -11,7 +11,7 @@
 pub mod capture;
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
-use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
 
@@ -31,7 +31,6 @@ pub struct Status {
     input_rate: AtomicU32,
     overrun_samples: AtomicU64,
     dropped_events: AtomicU64,
-    events: AtomicU64,
     xruns: AtomicU64,
     level_db_bits: AtomicU32,
 }
@@ -62,10 +61,6 @@ impl Status {
     /// Events the output thread could not take (queue full).
     pub fn dropped_events(&self) -> u64 {
         self.dropped_events.load(Ordering::Relaxed)
-    }
-    /// Events handed to the output thread.
-    pub fn events(&self) -> u64 {
-        self.events.load(Ordering::Relaxed)
     }
     /// Peak level of the last block read, dBFS.
     pub fn level_db(&self) -> f32 {
@@ -165,13 +160,9 @@ impl DetectorStage {
     /// Hands the pending events to the output thread; what does not fit is counted.
     fn hand_over(&mut self) {
         for e in self.events.drain(..) {
-            match self.sender.try_send(OutputMessage::Event(e)) {
-                Ok(()) => {
-                    self.status.events.fetch_add(1, Ordering::Relaxed);
-                }
-                Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {
-                    self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
-                }
+            // Full or gone, the event is lost: counted.
+            if self.sender.try_send(OutputMessage::Event(e)).is_err() {
+                self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
             }
         }
     }

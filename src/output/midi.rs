@@ -99,10 +99,6 @@ impl MidiSink {
         self.counters
     }
 
-    pub fn is_connected(&self) -> bool {
-        self.connection.is_some()
-    }
-
     fn connect(&mut self, now: Instant) {
         if self.connection.is_some() || now < self.next_connect {
             return;

@@ -76,9 +76,8 @@ struct Sinks {
     bounce: Option<LiveBounce>,
     state_delay: f64,
     heartbeat: Option<Duration>,
-    /// Seconds between two drawn bounce states.
-    state_period: f64,
-    states: bool,
+    /// Seconds between two drawn bounce states; `None`: no states are sent.
+    state_period: Option<f64>,
     print: PrintMode,
 }
 
@@ -105,15 +104,15 @@ impl Sinks {
                 .as_ref()
                 .and_then(|o| o.heartbeat_seconds)
                 .map(Duration::from_secs_f64),
-            state_period: 1.0 / state_rate.unwrap_or(60.0),
-            states: state_rate.is_some(),
+            state_period: state_rate.map(|r| 1.0 / r),
             print: s.print,
         }
     }
 
-    /// States are drawn when OSC asks for them (`bounce_state_rate`).
+    /// States are drawn when OSC asks for them (`bounce_state_rate`, which only an
+    /// `[osc]` section sets).
     fn states_wanted(&self) -> bool {
-        self.bounce.is_some() && self.osc.is_some() && self.state_period.is_finite() && self.states
+        self.bounce.is_some() && self.state_period.is_some()
     }
 }
 
@@ -150,7 +149,8 @@ pub fn run(
             wake = wake.min(next_heartbeat);
         }
         if sinks.states_wanted() {
-            wake = wake.min(now + Duration::from_secs_f64(sinks.state_period.min(0.25)));
+            let period = sinks.state_period.unwrap_or(0.25).min(0.25);
+            wake = wake.min(now + Duration::from_secs_f64(period));
         }
         let message = rx.recv_timeout(wake.saturating_duration_since(now));
         match message {
