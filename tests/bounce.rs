@@ -182,7 +182,7 @@ fn events_out_of_time_order_are_sorted() {
 // ---------------------------------------------------------------- live solver
 
 /// Streams `events` into a live solver the way the daemon does: each event reaches it
-/// `latency` seconds after its onset (its decision), and the states are drawn up to
+/// `latency` seconds after its onset (a complete held sound: after its end), and the states are drawn up to
 /// "now" minus the settings' state delay, in steps of `step` seconds.
 fn run_live(
     events: &[Event],
@@ -198,7 +198,9 @@ fn run_live(
     let step = 0.002;
     let mut now = 0.0;
     while now < until {
-        while next < events.len() && events[next].time + latency <= now {
+        // A held sound's complete event is decided at its end.
+        while next < events.len() && events[next].end.unwrap_or(events[next].time) + latency <= now
+        {
             if let Some(h) = solver.on_event(&events[next]) {
                 hits.push(h);
             }
@@ -321,21 +323,7 @@ fn live_solver_holds_a_slide_on_the_floor_and_launches_at_its_end() {
         hit(2, "tick", 2.4, 0.8),
     ];
     // The end of the slide is known 30 ms after it, like every event here.
-    let mut sorted = events.clone();
-    sorted[2].time = 1.9; // delivery order follows decision time: the end comes at 1.9 s
-    let s = settings(9.81);
-    let mut solver = LiveBounce::new(&s, 100.0);
-    let mut states = Vec::new();
-    let mut now = 0.0;
-    let mut next = 0;
-    while now < 3.5 {
-        while next < sorted.len() && sorted[next].time + 0.03 <= now {
-            solver.on_event(&events[next]);
-            next += 1;
-        }
-        solver.draw_until(now - s.state_delay_seconds.unwrap(), |st| states.push(st));
-        now += 0.002;
-    }
+    let (states, _, _) = run_live(&events, 0.03, 100.0, 3.5);
     check_live_invariants(&states, &[0.5, 1.2, 2.4]);
     let on_floor = states.iter().filter(|s| s.time >= 1.2 && s.time <= 1.9);
     assert!(on_floor.clone().count() > 50);

@@ -2,14 +2,13 @@
 //! nothing else, CSV), the bounce array, `check`, and the exit codes and messages of
 //! mistakes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use serde_json::Value;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::root;
 
 fn onomato(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_onomato"))
@@ -33,6 +32,19 @@ fn assert_each_fails_with(cases: &[(&[&str], &str)]) {
         assert!(stdout(&out).is_empty(), "{args:?} printed on stdout");
         assert!(!stderr(&out).contains("panicked"), "{args:?}");
     }
+}
+
+/// What onomato run with `args` shows when stdin, stdout and stderr are a terminal
+/// (`script` from util-linux gives it one). `args` hold no spaces.
+fn in_terminal(args: &[&str]) -> String {
+    let command = format!("{} {}", env!("CARGO_BIN_EXE_onomato"), args.join(" "));
+    let out = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .current_dir(root())
+        .output()
+        .expect("script (util-linux)");
+    assert!(out.status.success());
+    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 fn stdout(o: &Output) -> String {
@@ -502,19 +514,15 @@ fn analyze_shows_a_progress_bar_in_a_terminal_and_nothing_otherwise() {
         }
     }
     w.finalize().unwrap();
-    let command = format!(
-        "{} analyze {} -c config/onomato.toml > /dev/null",
-        env!("CARGO_BIN_EXE_onomato"),
-        long.display()
-    );
-    // `script` runs it with a terminal for stdin, stdout and stderr.
-    let in_terminal = Command::new("script")
-        .args(["-qec", &command, "/dev/null"])
-        .current_dir(root())
-        .output()
-        .expect("script (util-linux)");
-    assert!(in_terminal.status.success());
-    let shown = String::from_utf8_lossy(&in_terminal.stdout);
+    let long_arg = long.to_string_lossy();
+    let shown = in_terminal(&[
+        "analyze",
+        &long_arg,
+        "-c",
+        "config/onomato.toml",
+        ">",
+        "/dev/null",
+    ]);
     assert!(
         shown.contains("analysing") && shown.contains('%'),
         "{shown}"
@@ -532,25 +540,7 @@ fn analyze_shows_a_progress_bar_in_a_terminal_and_nothing_otherwise() {
 
 #[test]
 fn listen_in_a_terminal_prints_events_and_a_level_and_as_a_service_only_logs() {
-    let command = format!(
-        "{} listen -c config/onomato.toml --input examples/beat.wav --speed 8",
-        env!("CARGO_BIN_EXE_onomato")
-    );
-    let in_terminal = Command::new("script")
-        .args(["-qec", &command, "/dev/null"])
-        .current_dir(root())
-        .output()
-        .expect("script (util-linux)");
-    assert!(in_terminal.status.success());
-    let shown = String::from_utf8_lossy(&in_terminal.stdout);
-    assert!(
-        shown.contains("  input #") && shown.contains(" dB "),
-        "no level: {shown}"
-    );
-    assert_eq!(shown.matches(" impulse ").count(), 11, "{shown}");
-    // As a service (stdout and stderr not terminals): no events and no level on stdout,
-    // only logs on stderr.
-    let service = onomato(&[
+    let args = [
         "listen",
         "-c",
         "config/onomato.toml",
@@ -558,7 +548,16 @@ fn listen_in_a_terminal_prints_events_and_a_level_and_as_a_service_only_logs() {
         "examples/beat.wav",
         "--speed",
         "8",
-    ]);
+    ];
+    let shown = in_terminal(&args);
+    assert!(
+        shown.contains("  input #") && shown.contains(" dB "),
+        "no level: {shown}"
+    );
+    assert_eq!(shown.matches(" impulse ").count(), 11, "{shown}");
+    // As a service (stdout and stderr not terminals): no events and no level on stdout,
+    // only logs on stderr.
+    let service = onomato(&args);
     assert!(service.status.success());
     assert_eq!(stdout(&service), "");
     let log = stderr(&service);

@@ -15,16 +15,13 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 mod common;
+use common::root;
 
 const BIN: &str = env!("CARGO_BIN_EXE_onomato");
 
 /// The PulseAudio tests play in real time: one at a time, so that they do not starve
 /// each other of the machine's cores (a starved player inserts silence).
 static REAL_TIME_AUDIO: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// A child process killed when the test ends, whatever happens.
 struct Guard(Child);
@@ -38,8 +35,10 @@ impl Drop for Guard {
 
 /// A server stopped with SIGTERM (then killed if it does not stop): jackd removes its
 /// entry from JACK's shared registry only then, and the registry holds few servers.
+#[cfg(feature = "jack")]
 struct Server(Child);
 
+#[cfg(feature = "jack")]
 impl Drop for Server {
     fn drop(&mut self) {
         // SAFETY: kill(2) on our own child's pid.
@@ -56,22 +55,14 @@ impl Drop for Server {
     }
 }
 
-impl Guard {
-    /// The child, no longer killed on drop.
-    fn take(self) -> Child {
-        let me = std::mem::ManuallyDrop::new(self);
-        // SAFETY: `me` is never used or dropped again.
-        unsafe { std::ptr::read(&me.0) }
-    }
+fn spawn_child(cmd: &mut Command, what: &str) -> Child {
+    cmd.spawn().unwrap_or_else(|e| {
+        panic!("cannot start {what}: {e} (bash scripts/test.sh installs what these tests need)")
+    })
 }
 
 fn spawn(cmd: &mut Command, what: &str) -> Guard {
-    match cmd.spawn() {
-        Ok(c) => Guard(c),
-        Err(e) => {
-            panic!("cannot start {what}: {e} (bash scripts/test.sh installs what these tests need)")
-        }
-    }
+    Guard(spawn_child(cmd, what))
 }
 
 fn signal(child: &Child, name: &str) {
@@ -354,7 +345,7 @@ impl Jack {
         // A fixed name per test: JACK's registry holds 8 servers, and an entry left by
         // a server that died is reused only by a server of the same name.
         let name = format!("onomato_{tag}");
-        let server = spawn(
+        let server = Server(spawn_child(
             Command::new("jackd")
                 .env("JACK_NO_AUDIO_RESERVATION", "1")
                 .args([
@@ -371,7 +362,7 @@ impl Jack {
                 .stdout(Stdio::null())
                 .stderr(fs::File::create(dir.join("jackd.log")).unwrap()),
             "jackd (jackd2)",
-        );
+        ));
         let start = Instant::now();
         loop {
             let up = Command::new("jack_lsp")
@@ -421,7 +412,7 @@ impl Jack {
         }
         Self {
             _dump: dumper,
-            _server: Server(server.take()),
+            _server: server,
             name,
             dump,
         }
@@ -1075,41 +1066,16 @@ mod jack {
     fn midi_notes_arrive_at_jack_with_the_configured_note_channel_and_velocity() {
         let dir = common::temp_dir("listen-jack");
         let jack = Jack::start(&dir, "notes");
-        let patterns = root().join("examples/patterns");
         let config = dir.join("midi.toml");
-        fs::write(
-            &config,
-            format!(
-                r#"[[pattern]]
-name = "tick"
-takes = ["{p}/tick.wav"]
-note = 42
-[[pattern]]
-name = "pop"
-takes = ["{p}/pop.wav"]
-note = 38
-channel = 3
-[[pattern]]
-name = "boom"
-takes = ["{p}/boom.wav"]
-note = 36
-[[pattern]]
-name = "hoo"
-kind = "continuous"
-takes = ["{p}/hoo.wav"]
-note = 60
-
-[midi]
-connect = "midi-monitor"
-channel = 10
-gate_seconds = 0.03
-full_strength = 1.25
-strength_cc = 11
-"#,
-                p = patterns.display()
-            ),
-        )
-        .unwrap();
+        let patterns = [
+            example_pattern("tick", "note = 42"),
+            example_pattern("pop", "note = 38\nchannel = 3"),
+            example_pattern("boom", "note = 36"),
+            example_pattern("hoo", "kind = \"continuous\"\nnote = 60"),
+        ]
+        .concat();
+        let midi = "[midi]\nconnect = \"midi-monitor\"\nchannel = 10\ngate_seconds = 0.03\nfull_strength = 1.25\nstrength_cc = 11\n";
+        fs::write(&config, format!("{patterns}\n{midi}")).unwrap();
         let config_arg = config.to_string_lossy().to_string();
         let mut d = start_listen(
             &dir,

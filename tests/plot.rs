@@ -3,14 +3,10 @@
 //! legend), and it is a valid SVG that rsvg-convert renders (scripts/test.sh installs
 //! librsvg2-bin).
 
-use std::path::PathBuf;
 use std::process::Command;
 
 mod common;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use common::root;
 
 /// The texts of an SVG's `<text>` elements.
 fn texts(svg: &str) -> Vec<String> {

@@ -2,15 +2,10 @@
 //! take that is too long gives exactly the good take, trimmed, and the two refusals;
 //! the config gets the pattern and keeps its comments and layout.
 
-use std::path::PathBuf;
 use std::process::Command;
 
 mod common;
 use common::*;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 const CONFIG: &str = r#"# My voice.
 # A comment that must survive.
@@ -23,6 +18,16 @@ name = "tick"
 # tick comes first
 takes = ["TICK"]
 "#;
+
+/// Writes `CONFIG` (with the example's tick) as `voice.toml` in `dir`; returns its
+/// path and text.
+fn voice_config(dir: &std::path::Path) -> (std::path::PathBuf, String) {
+    let config = dir.join("voice.toml");
+    let tick = root().join("examples/patterns/tick.wav");
+    let original = CONFIG.replace("TICK", &tick.to_string_lossy());
+    std::fs::write(&config, &original).unwrap();
+    (config, original)
+}
 
 #[test]
 fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_config() {
@@ -49,10 +54,7 @@ fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_con
     add_noise(&mut rec, 0.0003, 5);
     let input = dir.join("takes.wav");
     write_wav_f32(&input, &rec, rate);
-    let config = dir.join("voice.toml");
-    let tick = root().join("examples/patterns/tick.wav");
-    let original = CONFIG.replace("TICK", &tick.to_string_lossy());
-    std::fs::write(&config, &original).unwrap();
+    let (config, original) = voice_config(&dir);
 
     let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
         .args(["record", "hum", "--continuous", "--takes", "3", "--config"])
@@ -147,10 +149,7 @@ fn a_file_without_a_usable_take_is_an_error_and_the_config_is_untouched() {
     add_noise(&mut rec, 0.0003, 6);
     let input = dir.join("silence.wav");
     write_wav_f32(&input, &rec, rate);
-    let config = dir.join("voice.toml");
-    let tick = root().join("examples/patterns/tick.wav");
-    let original = CONFIG.replace("TICK", &tick.to_string_lossy());
-    std::fs::write(&config, &original).unwrap();
+    let (config, original) = voice_config(&dir);
     let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
         .args(["record", "hum", "--config"])
         .arg(&config)

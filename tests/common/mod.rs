@@ -9,6 +9,11 @@ use onomato::Pattern;
 
 pub const RATE: u32 = 22_050;
 
+/// The project's folder (the example, its config and its patterns are there).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
 /// xorshift64*: a small deterministic generator, so every test signal is reproducible.
 pub struct Rng(u64);
 
