@@ -1015,27 +1015,36 @@ fn held_tone_files(dir: &Path) -> (PathBuf, PathBuf) {
     (pattern, recording)
 }
 
+/// Replays a 5 s held tone (from 0.5 s) with the spectral method, its first 0.3 s
+/// enrolled as the continuous pattern "hum", events printed as JSON, and `extra`
+/// arguments (the outputs).
+fn listen_to_held_tone(
+    dir: &Path,
+    extra: &[&str],
+    env: impl FnOnce(&mut Command) -> &mut Command,
+) -> Daemon {
+    let (pattern, recording) = held_tone_files(dir);
+    let hum = format!("hum={}:continuous", pattern.display());
+    let recording = recording.to_string_lossy().into_owned();
+    let mut args = vec![
+        "--pattern",
+        &hum,
+        "--method",
+        "spectral",
+        "--input",
+        &recording,
+    ];
+    args.extend_from_slice(&["--print", "json"]);
+    args.extend_from_slice(extra);
+    start_listen(dir, &args, env)
+}
+
 #[test]
 fn sigint_in_the_middle_of_a_held_sound_ends_it_on_osc() {
     let dir = common::temp_dir("listen-cutoff-osc");
     let osc = OscDump::start(&dir);
-    let (pattern, recording) = held_tone_files(&dir);
-    let d = start_listen(
-        &dir,
-        &[
-            "--pattern",
-            &format!("hum={}:continuous", pattern.display()),
-            "--method",
-            "spectral",
-            "--input",
-            &recording.to_string_lossy(),
-            "--osc",
-            &osc.target(),
-            "--print",
-            "json",
-        ],
-        |c| c,
-    );
+    let target = osc.target();
+    let d = listen_to_held_tone(&dir, &["--osc", &target], |c| c);
     osc.wait_count(
         |m| m.addr == "/onomato/hum/begin",
         1,
@@ -1228,26 +1237,10 @@ mod jack {
     fn sigterm_during_a_held_sound_releases_its_note() {
         let dir = common::temp_dir("listen-jack-cutoff");
         let jack = Jack::start(&dir, "cutoff");
-        let (pattern, recording) = held_tone_files(&dir);
-        let d = start_listen(
-            &dir,
-            &[
-                "--pattern",
-                &format!("hum={}:continuous", pattern.display()),
-                "--method",
-                "spectral",
-                "--input",
-                &recording.to_string_lossy(),
-                "--midi",
-                "midi-monitor",
-                "--print",
-                "json",
-            ],
-            |c| {
-                c.env("JACK_DEFAULT_SERVER", &jack.name)
-                    .env("JACK_NO_START_SERVER", "1")
-            },
-        );
+        let d = listen_to_held_tone(&dir, &["--midi", "midi-monitor"], |c| {
+            c.env("JACK_DEFAULT_SERVER", &jack.name)
+                .env("JACK_NO_START_SERVER", "1")
+        });
         wait_for_text(&d.stdout, "\"continuous\"", Duration::from_secs(10));
         std::thread::sleep(Duration::from_millis(500));
         let held: Vec<(u8, u8, u8)> = jack.messages();
