@@ -450,6 +450,27 @@ fn listen_mistakes_are_named_and_exit_1() {
             &["listen", "--input", "examples/beat.wav"],
             "no patterns to detect",
         ),
+        (
+            &[
+                "listen",
+                "-c",
+                "config/onomato.toml",
+                "--device",
+                "no-such-device",
+            ],
+            "no audio input device name contains 'no-such-device'",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--plot",
+                "no/such/dir/out.svg",
+            ],
+            "cannot draw the plot 'no/such/dir/out.svg'",
+        ),
     ];
     assert_each_fails_with(cases);
     // --speed without --input is a usage error.
