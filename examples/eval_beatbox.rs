@@ -2,6 +2,7 @@
 //!
 //!     cargo run --release --example eval_beatbox -- BEATBOX_DIR [--method waveform|spectral]
 //!         [--threshold X] [--verbose]
+//!         [--set isolated|beats|repeated]
 //!
 //! BEATBOX_DIR holds isolated/{b,c,ts}/*.wav (single hits), beats/*.wav with their
 //! annotation CSVs, and repeated/*.wav (see the recordings' own README). Recordings are
@@ -333,7 +334,7 @@ fn row(set: &str, method: Method, s: &Score) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(dir) = args.first().map(PathBuf::from) else {
-        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose]");
+        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated]");
         std::process::exit(2);
     };
     let methods = match args
@@ -346,6 +347,12 @@ fn main() {
         _ => vec![Method::Waveform, Method::Spectral],
     };
     let verbose = args.iter().any(|a| a == "--verbose");
+    let only = args
+        .iter()
+        .position(|a| a == "--set")
+        .and_then(|i| args.get(i + 1))
+        .cloned();
+    let wanted = |set: &str| only.as_deref().is_none_or(|o| o == set);
     let threshold = match args
         .iter()
         .position(|a| a == "--threshold")
@@ -371,21 +378,27 @@ fn main() {
                 eprintln!("{set} {method:?}\n{}", onomato::eval::render_text(s));
             }
         };
-        show(
-            "isolated, gaps 30-700 ms",
-            &isolated(&dir, &settings, (0.03, 0.7), 1),
-        );
-        show(
-            "isolated, gaps 30-120 ms",
-            &isolated(&dir, &settings, (0.03, 0.12), 2),
-        );
-        for (name, s) in beats(&dir, &settings) {
-            show(&name, &s);
+        if wanted("isolated") {
+            show(
+                "isolated, gaps 30-700 ms",
+                &isolated(&dir, &settings, (0.03, 0.7), 1),
+            );
+            show(
+                "isolated, gaps 30-120 ms",
+                &isolated(&dir, &settings, (0.03, 0.12), 2),
+            );
         }
-        show(
-            "repeated (5 sounds, 56 repetitions)",
-            &repeated(&dir, &settings),
-        );
+        if wanted("beats") {
+            for (name, s) in beats(&dir, &settings) {
+                show(&name, &s);
+            }
+        }
+        if wanted("repeated") {
+            show(
+                "repeated (5 sounds, 56 repetitions)",
+                &repeated(&dir, &settings),
+            );
+        }
     }
     println!();
     println!("Annotation check: mean share of energy below 300 Hz in the 40 ms after each annotated onset");

@@ -158,7 +158,16 @@ pub struct Score {
     pub latency_p95: Option<f64>,
     /// Mean intersection over union of matched continuous events.
     pub mean_iou: Option<f64>,
+    /// What each annotated label was detected as: annotated label, then detected
+    /// pattern (or `"(missed)"`) and count, from the one-to-one matching of onsets with
+    /// labels ignored. Detections that match no annotation are under `"(none)"`.
+    pub confusions: BTreeMap<String, BTreeMap<String, usize>>,
 }
+
+/// Row and column name in [`Score::confusions`] for an annotation with no detection.
+pub const MISSED: &str = "(missed)";
+/// Row name in [`Score::confusions`] for detections that match no annotation.
+pub const NO_ANNOTATION: &str = "(none)";
 
 /// One-to-one matching: pairs with the closest onsets first, each detection and each
 /// annotation used once, onsets within `tolerance`, labels equal unless `any_label`.
@@ -226,7 +235,34 @@ pub fn score(events: &[Event], truth: &[Annotation], tolerance: f64) -> Score {
         events.len() - pairs.len(),
         truth.len() - pairs.len(),
     );
-    let onset_pairs = match_pairs(events, truth, tolerance, true).len();
+    let any_label_pairs = match_pairs(events, truth, tolerance, true);
+    let onset_pairs = any_label_pairs.len();
+    let mut confusions: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    let mut event_matched = vec![false; events.len()];
+    let mut truth_matched = vec![false; truth.len()];
+    for &(i, j) in &any_label_pairs {
+        event_matched[i] = true;
+        truth_matched[j] = true;
+        *confusions
+            .entry(truth[j].label.clone())
+            .or_default()
+            .entry(events[i].pattern.to_string())
+            .or_default() += 1;
+    }
+    for t in truth.iter().zip(&truth_matched).filter(|(_, m)| !**m) {
+        *confusions
+            .entry(t.0.label.clone())
+            .or_default()
+            .entry(MISSED.to_string())
+            .or_default() += 1;
+    }
+    for e in events.iter().zip(&event_matched).filter(|(_, m)| !**m) {
+        *confusions
+            .entry(NO_ANNOTATION.to_string())
+            .or_default()
+            .entry(e.0.pattern.to_string())
+            .or_default() += 1;
+    }
     let onsets = Counts::new(
         onset_pairs,
         events.len() - onset_pairs,
@@ -256,6 +292,7 @@ pub fn score(events: &[Event], truth: &[Annotation], tolerance: f64) -> Score {
         latency_median: quantile(&latencies, 0.5),
         latency_p95: quantile(&latencies, 0.95),
         mean_iou: (!ious.is_empty()).then(|| ious.iter().sum::<f64>() / ious.len() as f64),
+        confusions,
     }
 }
 
@@ -281,6 +318,11 @@ pub fn render_text(score: &Score) -> String {
     );
     if let Some(iou) = score.mean_iou {
         out += &format!("continuous   mean IoU {iou:.3}\n");
+    }
+    out += "detected as (annotated: detected count, ...)\n";
+    for (label, row) in &score.confusions {
+        let cells: Vec<String> = row.iter().map(|(d, n)| format!("{d} {n}")).collect();
+        out += &format!("  {label:<10} {}\n", cells.join(", "));
     }
     out
 }

@@ -5,7 +5,7 @@ use std::process::Command;
 use std::sync::Arc;
 
 use onomato::config::PatternKind;
-use onomato::eval::{parse_truth, score, Annotation};
+use onomato::eval::{parse_truth, render_text, score, Annotation, MISSED, NO_ANNOTATION};
 use onomato::Event;
 
 fn ev(pattern: &str, time: f64, end: Option<f64>, latency: f64) -> Event {
@@ -74,6 +74,21 @@ fn counts_hits_misses_wrong_labels_and_extra_detections() {
     assert!((s.latency_median.unwrap() - 0.03).abs() < 1e-9);
     assert!((s.latency_p95.unwrap() - 0.05).abs() < 1e-9);
     assert_eq!(s.mean_iou, None);
+    // What each annotated label was taken for.
+    let row = |label: &str| -> Vec<(String, usize)> {
+        s.confusions[label]
+            .iter()
+            .map(|(d, n)| (d.clone(), *n))
+            .collect()
+    };
+    assert_eq!(row("B"), [("B".to_string(), 1)]);
+    assert_eq!(row("K"), [("t".to_string(), 1)]);
+    assert_eq!(row("t"), [(MISSED.to_string(), 1), ("t".to_string(), 1)]);
+    assert_eq!(
+        row(NO_ANNOTATION),
+        [("B".to_string(), 1), ("t".to_string(), 1)]
+    );
+    assert!(render_text(&s).contains("  K          t 1\n"));
 }
 
 #[test]
