@@ -2,7 +2,7 @@
 //!
 //!     cargo run --release --example eval_beatbox -- BEATBOX_DIR [--method waveform|spectral]
 //!         [--threshold X] [--verbose]
-//!         [--set isolated|beats|repeated]
+//!         [--set isolated|beats|repeated] [--speech-guard SECONDS]
 //!
 //! BEATBOX_DIR holds isolated/{b,c,ts}/*.wav (single hits), beats/*.wav with their
 //! annotation CSVs, and repeated/*.wav (see the recordings' own README). Recordings are
@@ -334,7 +334,7 @@ fn row(set: &str, method: Method, s: &Score) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(dir) = args.first().map(PathBuf::from) else {
-        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated]");
+        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated] [--speech-guard SECONDS]");
         std::process::exit(2);
     };
     let methods = match args
@@ -364,12 +364,24 @@ fn main() {
         }),
         None => DetectorSettings::default().threshold,
     };
+    let speech_guard = match args
+        .iter()
+        .position(|a| a == "--speech-guard")
+        .and_then(|i| args.get(i + 1))
+    {
+        Some(t) => t.parse::<f64>().unwrap_or_else(|_| {
+            eprintln!("--speech-guard takes a number of seconds, found '{t}'");
+            std::process::exit(2);
+        }),
+        None => DetectorSettings::default().speech_guard_seconds,
+    };
     println!("| set | method | F1 | precision | recall | onset F1 | latency median ms | latency p95 ms |");
     println!("|---|---|---|---|---|---|---|---|");
     for method in methods {
         let settings = DetectorSettings {
             method,
             threshold,
+            speech_guard_seconds: speech_guard,
             ..DetectorSettings::default()
         };
         let show = |set: &str, s: &Score| {

@@ -183,6 +183,10 @@ pub struct PatternSource {
     /// Use this channel of multi-channel files (from 0) instead of mixing them.
     #[arg(long)]
     pub channel: Option<u16>,
+    /// Spectral method: ignore onsets this soon after a sound that is none of the
+    /// patterns, such as speech; 0 turns the guard off (overrides the config).
+    #[arg(long, value_name = "SECONDS")]
+    pub speech_guard: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -250,6 +254,9 @@ impl PatternSource {
         }
         if let Some(channel) = self.channel {
             config.detector.channel = Some(channel);
+        }
+        if let Some(guard) = self.speech_guard {
+            config.detector.speech_guard_seconds = guard;
         }
         config.detector.validate("command line")?;
         config.check_pattern_thresholds("command line")?;

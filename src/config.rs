@@ -126,6 +126,7 @@ struct RawDetector {
     max_pattern_seconds: Option<f64>,
     channel: Option<u16>,
     decision_seconds: Option<f64>,
+    speech_guard_seconds: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -175,6 +176,10 @@ pub struct DetectorSettings {
     pub max_pattern_seconds: f64,
     /// Spectral method: how long after an onset the sound is classified.
     pub decision_seconds: f64,
+    /// Spectral method: an onset is ignored when, this long before it, a sound that no
+    /// pattern recognised (speech, music) held 60 ms within 10 dB of the new sound's
+    /// peak. 0 turns the guard off.
+    pub speech_guard_seconds: f64,
     /// Channel of multi-channel inputs (`None`: mix all channels). Mono files are used
     /// as they are.
     pub channel: Option<u16>,
@@ -191,6 +196,7 @@ impl Default for DetectorSettings {
             max_pattern_seconds: 5.0,
             channel: None,
             decision_seconds: 0.025,
+            speech_guard_seconds: 0.5,
         }
     }
 }
@@ -492,6 +498,9 @@ impl RawConfig {
                 .unwrap_or(defaults.max_pattern_seconds),
             channel: d.channel,
             decision_seconds: d.decision_seconds.unwrap_or(defaults.decision_seconds),
+            speech_guard_seconds: d
+                .speech_guard_seconds
+                .unwrap_or(defaults.speech_guard_seconds),
         };
         detector.validate(origin)?;
 
@@ -799,6 +808,9 @@ fn check_thresholds(
     Ok(())
 }
 
+/// Longest `speech_guard_seconds`: the detector keeps this much history.
+pub const MAX_SPEECH_GUARD_SECONDS: f64 = 1.0;
+
 impl DetectorSettings {
     /// Checks every field; `origin` names the source in messages.
     pub fn validate(&self, origin: &str) -> Result<(), ConfigError> {
@@ -827,6 +839,15 @@ impl DetectorSettings {
             return Err(invalid(
                 &item,
                 format!("decision_seconds must be between 0.015 and 0.2, found {d}"),
+            ));
+        }
+        let g = self.speech_guard_seconds;
+        if !(g.is_finite() && (0.0..=MAX_SPEECH_GUARD_SECONDS).contains(&g)) {
+            return Err(invalid(
+                &item,
+                format!(
+                    "speech_guard_seconds must be between 0 (off) and {MAX_SPEECH_GUARD_SECONDS}, found {g}"
+                ),
             ));
         }
         let m = self.max_pattern_seconds;

@@ -67,6 +67,7 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         ("[detector]\nsample_rate = \"fast\"\n", &["invalid type", "expected u32"]),
         ("[detector]\nmax_pattern_seconds = 0\n", &["max_pattern_seconds must be between 0.05 and 60, found 0"]),
         ("[detector]\nsuppression_seconds = -1\n", &["suppression_seconds must be between 0 and 5, found -1"]),
+        ("[detector]\nspeech_guard_seconds = 2\n", &["speech_guard_seconds must be between 0 (off) and 1, found 2"]),
         (&format!("{TICK}threshold = 0\n"), &["pattern #1 ('tick')", "threshold must be greater than 0 and at most 1, found 0"]),
         ("[[pattern]]\nname = \"tick\"\ntakes = []\n", &["pattern #1 ('tick')", "takes is empty; expected at least one WAV file"]),
         ("[[pattern]]\nname = \"tick\"\n", &["missing field `takes`"]),

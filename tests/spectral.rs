@@ -326,3 +326,49 @@ fn more_enrolment_takes_do_not_make_it_worse() {
         "1 take: F1 {one}; 3 takes: F1 {three}"
     );
 }
+
+#[test]
+fn hits_right_after_an_unrecognised_sustained_sound_are_ignored_unless_the_guard_is_off() {
+    // A sung vowel (none of the patterns) ends 150 ms before each kick, as a word's
+    // consonant follows its vowel; then the same kicks alone.
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut after_vowel = Vec::new();
+    let mut alone = Vec::new();
+    for i in 0..4u64 {
+        rec.extend(buzz(RATE, 0.25, 320.0).iter().map(|v| v * 0.8));
+        rec.extend(vec![0.0; samples_for(0.15, RATE)]);
+        after_vowel.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(kick(300 + i));
+        rec.extend(vec![0.0; samples_for(0.8, RATE)]);
+    }
+    for i in 0..4u64 {
+        alone.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(kick(400 + i));
+        rec.extend(vec![0.0; samples_for(0.8, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 12);
+    let found = |events: &[Event], times: &[f64]| {
+        times
+            .iter()
+            .filter(|&&t| {
+                events
+                    .iter()
+                    .any(|e| &*e.pattern == "b" && (e.time - t).abs() < 0.05)
+            })
+            .count()
+    };
+    let guarded = detect(&spectral(), &rec, 256);
+    assert_eq!(found(&guarded, &after_vowel), 0, "{guarded:#?}");
+    assert_eq!(found(&guarded, &alone), 4, "{guarded:#?}");
+    assert_eq!(guarded.len(), 4, "{guarded:#?}");
+    let unguarded = detect(
+        &DetectorSettings {
+            speech_guard_seconds: 0.0,
+            ..spectral()
+        },
+        &rec,
+        256,
+    );
+    assert_eq!(found(&unguarded, &after_vowel), 4, "{unguarded:#?}");
+    assert_eq!(found(&unguarded, &alone), 4, "{unguarded:#?}");
+}
