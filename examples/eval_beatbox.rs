@@ -148,16 +148,19 @@ fn cut_first(rec: &Audio, truth: &[Annotation], label: &str) -> Option<Vec<f32>>
     Some(rec.samples[start..end.min(rec.samples.len())].to_vec())
 }
 
-fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
+/// A beat take from `beats/` and its annotation, labels reduced to letters and digits.
+fn load_beat(dir: &Path, name: &str) -> (Audio, Vec<Annotation>) {
     let beats = dir.join("beats");
-    let load = |name: &str| {
-        let rec = read(&beats.join(format!("{name}.wav")));
-        let mut truth = load_truth(&beats.join(format!("{name}.csv"))).unwrap();
-        for t in &mut truth {
-            t.label = label_name(&t.label);
-        }
-        (rec, truth)
-    };
+    let rec = read(&beats.join(format!("{name}.wav")));
+    let mut truth = load_truth(&beats.join(format!("{name}.csv"))).unwrap();
+    for t in &mut truth {
+        t.label = label_name(&t.label);
+    }
+    (rec, truth)
+}
+
+fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
+    let load = |name: &str| load_beat(dir, name);
     let labels = |truth: &[Annotation]| {
         let mut l: Vec<String> = truth.iter().map(|t| t.label.clone()).collect();
         l.sort();
@@ -180,7 +183,7 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
     let mut out = Vec::new();
     for name in ["rsalazar_rec3", "rsalazar_rec4"] {
         let (rec, truth) = load(name);
-        let shift = label_phase(&rec, &truth);
+        let shift = label_phase(&truth, &low_shares(&rec, &truth));
         if shift != 0 {
             out.push((
                 format!("{name}, annotation as given"),
@@ -362,17 +365,18 @@ fn shift_labels(truth: &[Annotation], shift: i64) -> Vec<Annotation> {
 
 /// The label shift (-3..=3 steps) under which the annotation's kicks ("B") hold the
 /// most low energy against its hi-hats ("t"): 0 when the annotation fits the audio.
-/// Independent of the detector.
-fn label_phase(rec: &Audio, truth: &[Annotation]) -> i64 {
-    let shares = low_shares(rec, truth);
+/// Independent of the detector. `shares` are `low_shares` of the annotation's onsets.
+fn label_phase(truth: &[Annotation], shares: &[Option<f64>]) -> i64 {
     let fit = |shift: i64| {
-        let by = low_share_by_label(&shift_labels(truth, shift), &shares);
+        let by = low_share_by_label(&shift_labels(truth, shift), shares);
         let get = |l: &str| by.iter().find(|b| b.0 == l).map_or(0.0, |b| b.1);
         get("B") - get("t")
     };
+    // The best fit; on a tie, the smallest shift.
     (-3..=3)
-        .max_by(|&a, &b| fit(a).total_cmp(&fit(b)).then(b.abs().cmp(&a.abs())))
-        .unwrap_or(0)
+        .map(|shift| (shift, fit(shift)))
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.abs().cmp(&a.0.abs())))
+        .map_or(0, |(shift, _)| shift)
 }
 
 fn row(set: &str, method: Method, s: &Score) {
@@ -392,50 +396,47 @@ fn row(set: &str, method: Method, s: &Score) {
     );
 }
 
+/// The value after option `name` in `args`.
+fn option_value<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
+    let i = args.iter().position(|a| a == name)?;
+    args.get(i + 1).map(String::as_str)
+}
+
+/// The number after option `name`; exits with a message when it is not one.
+fn number_option(args: &[String], name: &str, expected: &str) -> Option<f64> {
+    let text = option_value(args, name)?;
+    Some(text.parse().unwrap_or_else(|_| {
+        eprintln!("{name} takes {expected}, found '{text}'");
+        std::process::exit(2);
+    }))
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(dir) = args.first().map(PathBuf::from) else {
         eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated] [--speech-guard SECONDS]");
         std::process::exit(2);
     };
-    let methods = match args
-        .iter()
-        .position(|a| a == "--method")
-        .and_then(|i| args.get(i + 1))
-    {
-        Some(m) if m == "waveform" => vec![Method::Waveform],
-        Some(m) if m == "spectral" => vec![Method::Spectral],
-        _ => vec![Method::Waveform, Method::Spectral],
+    let methods = match option_value(&args, "--method") {
+        Some("waveform") => vec![Method::Waveform],
+        Some("spectral") => vec![Method::Spectral],
+        None => vec![Method::Waveform, Method::Spectral],
+        Some(other) => {
+            eprintln!("--method takes waveform or spectral, found '{other}'");
+            std::process::exit(2);
+        }
     };
     let verbose = args.iter().any(|a| a == "--verbose");
-    let only = args
-        .iter()
-        .position(|a| a == "--set")
-        .and_then(|i| args.get(i + 1))
-        .cloned();
-    let wanted = |set: &str| only.as_deref().is_none_or(|o| o == set);
-    let threshold = match args
-        .iter()
-        .position(|a| a == "--threshold")
-        .and_then(|i| args.get(i + 1))
-    {
-        Some(t) => t.parse::<f64>().unwrap_or_else(|_| {
-            eprintln!("--threshold takes a number from 0 to 1, found '{t}'");
-            std::process::exit(2);
-        }),
-        None => DetectorSettings::default().threshold,
-    };
-    let speech_guard = match args
-        .iter()
-        .position(|a| a == "--speech-guard")
-        .and_then(|i| args.get(i + 1))
-    {
-        Some(t) => t.parse::<f64>().unwrap_or_else(|_| {
-            eprintln!("--speech-guard takes a number of seconds, found '{t}'");
-            std::process::exit(2);
-        }),
-        None => DetectorSettings::default().speech_guard_seconds,
-    };
+    let only = option_value(&args, "--set");
+    if let Some(set) = only.filter(|s| !["isolated", "beats", "repeated"].contains(s)) {
+        eprintln!("--set takes isolated, beats or repeated, found '{set}'");
+        std::process::exit(2);
+    }
+    let wanted = |set: &str| only.is_none_or(|o| o == set);
+    let threshold = number_option(&args, "--threshold", "a number from 0 to 1")
+        .unwrap_or(DetectorSettings::default().threshold);
+    let speech_guard = number_option(&args, "--speech-guard", "a number of seconds")
+        .unwrap_or(DetectorSettings::default().speech_guard_seconds);
     println!("| set | method | F1 | precision | recall | onset F1 | latency median ms | latency p95 ms |");
     println!("|---|---|---|---|---|---|---|---|");
     for method in methods {
@@ -484,17 +485,13 @@ fn main() {
         "rsalazar_rec4",
         "rsalazar_rec6",
     ] {
-        let beats = dir.join("beats");
-        let rec = read(&beats.join(format!("{name}.wav")));
-        let mut truth = load_truth(&beats.join(format!("{name}.csv"))).unwrap();
-        for t in &mut truth {
-            t.label = label_name(&t.label);
-        }
-        let cells: Vec<String> = low_share_by_label(&truth, &low_shares(&rec, &truth))
+        let (rec, truth) = load_beat(&dir, name);
+        let shares = low_shares(&rec, &truth);
+        let cells: Vec<String> = low_share_by_label(&truth, &shares)
             .into_iter()
             .map(|(l, share, n)| format!("{l}: {:.0}% ({n})", share * 100.0))
             .collect();
-        let shift = label_phase(&rec, &truth);
+        let shift = label_phase(&truth, &shares);
         println!("| {name} | {} | {shift:+} |", cells.join(", "));
     }
 }

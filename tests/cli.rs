@@ -336,6 +336,17 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
                 "examples/beat.wav",
                 "-c",
                 "config/onomato.toml",
+                "--speech-guard",
+                "2",
+            ],
+            "speech_guard_seconds must be between 0 (off) and 1, found 2",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
                 "--gravity",
                 "0",
             ],
