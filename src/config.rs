@@ -127,6 +127,7 @@ struct RawDetector {
     channel: Option<u16>,
     decision_seconds: Option<f64>,
     speech_guard_seconds: Option<f64>,
+    min_strength: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -180,6 +181,10 @@ pub struct DetectorSettings {
     /// pattern recognised (speech, music) held 60 ms within 10 dB of the new sound's
     /// peak. 0 turns the guard off.
     pub speech_guard_seconds: f64,
+    /// Spectral method: a sound whose strength (amplitude against the enrolled take,
+    /// over the first `decision_seconds`) is below this is not the user's: a voice
+    /// across the room, a breath, the hum of a fan. 0 accepts any level.
+    pub min_strength: f64,
     /// Channel of multi-channel inputs (`None`: mix all channels). Mono files are used
     /// as they are.
     pub channel: Option<u16>,
@@ -197,6 +202,7 @@ impl Default for DetectorSettings {
             channel: None,
             decision_seconds: 0.025,
             speech_guard_seconds: 0.5,
+            min_strength: 0.06,
         }
     }
 }
@@ -501,6 +507,7 @@ impl RawConfig {
             speech_guard_seconds: d
                 .speech_guard_seconds
                 .unwrap_or(defaults.speech_guard_seconds),
+            min_strength: d.min_strength.unwrap_or(defaults.min_strength),
         };
         detector.validate(origin)?;
 
@@ -848,6 +855,13 @@ impl DetectorSettings {
                 format!(
                     "speech_guard_seconds must be between 0 (off) and {MAX_SPEECH_GUARD_SECONDS}, found {g}"
                 ),
+            ));
+        }
+        let s = self.min_strength;
+        if !(s.is_finite() && (0.0..=1.0).contains(&s)) {
+            return Err(invalid(
+                &item,
+                format!("min_strength must be between 0 (any level) and 1, found {s}"),
             ));
         }
         let m = self.max_pattern_seconds;

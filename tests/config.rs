@@ -21,6 +21,7 @@ fn the_example_config_loads_with_its_patterns() {
     let config = Config::load(&path).expect("example config is valid");
     assert_eq!(config.detector.method, Method::Waveform);
     assert_eq!(config.detector.sample_rate, 22_050);
+    assert_eq!(config.detector.min_strength, 0.06);
     let names: Vec<&str> = config.patterns.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names, ["tick", "pop", "boom", "hoo"]);
     assert_eq!(config.patterns[3].kind, PatternKind::Continuous);
@@ -68,6 +69,7 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         ("[detector]\nmax_pattern_seconds = 0\n", &["max_pattern_seconds must be between 0.05 and 60, found 0"]),
         ("[detector]\nsuppression_seconds = -1\n", &["suppression_seconds must be between 0 and 5, found -1"]),
         ("[detector]\nspeech_guard_seconds = 2\n", &["speech_guard_seconds must be between 0 (off) and 1, found 2"]),
+        ("[detector]\nmin_strength = 1.5\n", &["min_strength must be between 0 (any level) and 1, found 1.5"]),
         (&format!("{TICK}threshold = 0\n"), &["pattern #1 ('tick')", "threshold must be greater than 0 and at most 1, found 0"]),
         ("[[pattern]]\nname = \"tick\"\ntakes = []\n", &["pattern #1 ('tick')", "takes is empty; expected at least one WAV file"]),
         ("[[pattern]]\nname = \"tick\"\n", &["missing field `takes`"]),

@@ -372,3 +372,43 @@ fn hits_right_after_an_unrecognised_sustained_sound_are_ignored_unless_the_guard
     assert_eq!(found(&unguarded, &after_vowel), 4, "{unguarded:#?}");
     assert_eq!(found(&unguarded, &alone), 4, "{unguarded:#?}");
 }
+
+#[test]
+fn sounds_far_quieter_than_the_takes_are_ignored_unless_min_strength_is_0() {
+    // Kicks 12 dB below the enrolled ones, then the same 30 dB below (a voice across
+    // the room); the noise floor is low enough for both to stand out.
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let (mut near, mut far) = (Vec::new(), Vec::new());
+    for (gain, times) in [(0.25f32, &mut near), (0.0316, &mut far)] {
+        for i in 0..4u64 {
+            times.push(rec.len() as f64 / f64::from(RATE));
+            rec.extend(kick(500 + i).iter().map(|v| v * gain));
+            rec.extend(vec![0.0; samples_for(0.6, RATE)]);
+        }
+    }
+    add_noise(&mut rec, 0.00002, 13);
+    let found = |events: &[Event], times: &[f64]| {
+        times
+            .iter()
+            .filter(|&&t| {
+                events
+                    .iter()
+                    .any(|e| &*e.pattern == "b" && (e.time - t).abs() < 0.05)
+            })
+            .count()
+    };
+    let default = detect(&spectral(), &rec, 256);
+    assert_eq!(found(&default, &near), 4, "{default:#?}");
+    assert_eq!(found(&default, &far), 0, "{default:#?}");
+    assert_eq!(default.len(), 4, "{default:#?}");
+    let any_level = detect(
+        &DetectorSettings {
+            min_strength: 0.0,
+            ..spectral()
+        },
+        &rec,
+        256,
+    );
+    assert_eq!(found(&any_level, &near), 4, "{any_level:#?}");
+    assert_eq!(found(&any_level, &far), 4, "{any_level:#?}");
+}

@@ -16,7 +16,10 @@
 //! before the attack weigh little), in dB, floored 50 dB below its loudest band, and compared with the same of every enrolment take by correlation (so
 //! the level does not matter), allowing a shift of ±1 frame. The best pattern wins if
 //! its score passes its threshold; below, the sound is none of the patterns and nothing
-//! fires. Each onset is decided once, so a sound never gives two events.
+//! fires. Each onset is decided once, so a sound never gives two events. A sound whose
+//! strength (its amplitude against the take's over the decision window) is below
+//! `min_strength` is not the user's (a voice across the room, a breath) and does not
+//! fire either.
 //!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 60 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
@@ -329,6 +332,7 @@ pub struct SpectralMatcher {
     /// The newest recognised impulse, whose span grows while its sound goes on.
     extending: Option<ExtendingSpan>,
     speech_guard_seconds: f64,
+    min_strength: f64,
 }
 
 const RECOGNISED_SPANS: usize = 8;
@@ -437,6 +441,7 @@ impl SpectralMatcher {
             recognised_next: 0,
             extending: None,
             speech_guard_seconds: settings.speech_guard_seconds,
+            min_strength: settings.min_strength,
         }
     }
 
@@ -711,6 +716,9 @@ impl SpectralMatcher {
             .map(|n| f64::from(self.sample(n)).powi(2))
             .sum();
         let strength = (early / template.early_energy.max(1e-12)).sqrt();
+        if strength < self.min_strength {
+            return;
+        }
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
         let decided = Event {
