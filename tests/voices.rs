@@ -215,21 +215,36 @@ fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
 
     // Words said alone, more slowly, at several levels, are found at their onsets.
     // "pop" and "pew" begin with the same burst, and a decision 25 ms after the onset
-    // cannot tell them apart, so this part enrols "pop" without "pew". "tick" is left
-    // out: its "t" is more than 12 dB below its vowel, so the enrolled take's onset is
-    // placed on the vowel while an instance's is placed on the "t". A word's final
-    // consonant ("pop") may give a second event of its own.
+    // cannot tell them apart, so this part enrols "pop" without "pew". "tick" opens
+    // with a "t" 20 dB below its vowel, on which its take's onset must be placed as an
+    // instance's is. A word's final consonant ("pop") may give a second event of its
+    // own.
     let alone_patterns: Vec<Pattern> = patterns
         .iter()
         .filter(|p| &*p.name != "pew")
         .cloned()
         .collect();
+    for (words, seed) in [(&["pop", "boom"][..], 5), (&["tick"][..], 6)] {
+        said_alone_are_found(&dir, &alone_patterns, &settings, words, seed);
+    }
+}
+
+/// Three rounds of `words`, each said alone at speed 140 with a gain of -9..0 dB and
+/// 0.3-0.8 s of silence after it: at least 90% must be found within 50 ms of their
+/// onset, none with another label, and no word may give more than two events.
+fn said_alone_are_found(
+    dir: &Path,
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+    words: &[&'static str],
+    seed: u64,
+) {
     let mut rec = vec![0.0f32; samples_for(0.5, RATE)];
     let mut truth = Vec::new();
-    let mut rng = Rng::new(5);
+    let mut rng = Rng::new(seed);
     for round in 0..3 {
-        for name in ["pop", "boom"] {
-            let said = word(&dir, &format!("{name}-alone-{round}"), name, "140");
+        for &name in words {
+            let said = word(dir, &format!("{name}-alone-{round}"), name, "140");
             let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
             truth.push((name, rec.len() as f64 / f64::from(RATE)));
             rec.extend(said.iter().map(|v| v * gain));
@@ -237,7 +252,7 @@ fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
         }
     }
     add_noise(&mut rec, 0.0005, 22);
-    let mut det = Detector::new(alone_patterns, &settings, RATE).unwrap();
+    let mut det = Detector::new(patterns.to_vec(), settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 256);
     let summary: Vec<String> = events
         .iter()

@@ -24,8 +24,8 @@ pub use waveform::WaveformMatcher;
 
 /// The matcher a detector runs.
 enum Matcher {
-    Waveform(WaveformMatcher),
-    Spectral(SpectralMatcher),
+    Waveform(Box<WaveformMatcher>),
+    Spectral(Box<SpectralMatcher>),
 }
 
 impl Matcher {
@@ -148,8 +148,12 @@ impl Detector {
         }
         let open_ids = patterns.iter().map(|p| (p.name.clone(), None)).collect();
         let matcher = match settings.method {
-            Method::Waveform => Matcher::Waveform(WaveformMatcher::new(patterns, settings)),
-            Method::Spectral => Matcher::Spectral(SpectralMatcher::new(patterns, settings)),
+            Method::Waveform => {
+                Matcher::Waveform(Box::new(WaveformMatcher::new(patterns, settings)))
+            }
+            Method::Spectral => {
+                Matcher::Spectral(Box::new(SpectralMatcher::new(patterns, settings)))
+            }
         };
         let resampler = if input_rate == settings.sample_rate {
             None

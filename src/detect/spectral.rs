@@ -333,7 +333,12 @@ pub struct SpectralMatcher {
     extending: Option<ExtendingSpan>,
     speech_guard_seconds: f64,
     min_strength: f64,
+    /// The first onsets placed (samples), kept for [`take_onset`]'s look at a take.
+    placed: [u64; PLACED_KEPT],
+    placed_count: usize,
 }
+
+const PLACED_KEPT: usize = 8;
 
 const RECOGNISED_SPANS: usize = 8;
 
@@ -375,8 +380,9 @@ impl SpectralMatcher {
             let mut sustain_frames = 0usize;
             let mut power = 0.0f64;
             for take in &p.takes {
+                let onset = take_onset(&take.samples, settings, analyzer.hop);
                 let (features, early_energy, mean_frame, n, onset_in_take) =
-                    take_features(&mut analyzer, &take.samples, decision_frames);
+                    take_features(&mut analyzer, &take.samples, decision_frames, onset);
                 templates.push(Template {
                     pattern: pi,
                     features,
@@ -442,6 +448,8 @@ impl SpectralMatcher {
             extending: None,
             speech_guard_seconds: settings.speech_guard_seconds,
             min_strength: settings.min_strength,
+            placed: [0; PLACED_KEPT],
+            placed_count: 0,
         }
     }
 
@@ -639,6 +647,10 @@ impl SpectralMatcher {
                         / self.hop() as f64)
                         .round() as u64;
                     self.pending[0].placed = Some((time_sample, frame));
+                    if self.placed_count < PLACED_KEPT {
+                        self.placed[self.placed_count] = time_sample;
+                        self.placed_count += 1;
+                    }
                     (time_sample, frame)
                 }
                 None => break,
@@ -652,6 +664,9 @@ impl SpectralMatcher {
     }
 
     fn classify(&mut self, time_sample: u64, onset_frame: u64, out: &mut Vec<Event>) {
+        if self.templates.is_empty() {
+            return;
+        }
         let mut best_template = 0usize;
         let mut best_score = f32::NEG_INFINITY;
         for shift in 0..=2 * MAX_SHIFT {
@@ -947,14 +962,15 @@ fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f6
     Some(rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
 }
 
-/// Features of one take: runs the same analysis over the take (after a little silence),
-/// finds its first onset, and returns the normalised decision frames, the energy of the
+/// Features of one take from its onset (`onset_in_take`, from [`take_onset`]): runs
+/// the same analysis over the take (after a little silence) and returns the normalised decision frames, the energy of the
 /// samples in the decision window, the take's mean frame after the onset (for sustained
 /// sounds) and how many frames that mean covers.
 fn take_features(
     analyzer: &mut Analyzer,
     take: &[f32],
     decision_frames: usize,
+    onset_in_take: usize,
 ) -> (Vec<f32>, f64, Vec<f32>, usize, usize) {
     let hop = analyzer.hop;
     let win = analyzer.win;
@@ -970,13 +986,6 @@ fn take_features(
         analyzer.frame(&padded[a..b], &mut frame);
         frames[f * BANDS..(f + 1) * BANDS].copy_from_slice(&frame);
     }
-    // The take's onset is placed as an instance's is: on the samples (first short block
-    // within `ONSET_RANGE_DB` of the loudest in its first 150 ms), then the frame
-    // centred on it.
-    let onset_in_take = energy_onset(
-        &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)],
-        hop,
-    );
     let onset =
         ((lead + onset_in_take).saturating_sub(win / 2) as f64 / hop as f64).round() as usize;
     let onset = onset.min(n_frames - 1);
@@ -1007,6 +1016,64 @@ fn take_features(
     }
     (features, early_energy, mean, count, onset_in_take)
 }
+
+/// A take's onset, in samples, placed as an instance's is on the stream: the first
+/// short block within `ONSET_RANGE_DB` of the loudest of its first 150 ms. Unless a
+/// stream would place it much earlier: a spoken "tick" opens with a "t" 20 dB below its
+/// vowel, which the stream finds on its own and decides on before the vowel comes. So
+/// the take is also run through the onset detector, after 0.3 s of noise at its own
+/// quietest level (as a stream has), and when the first onset placed there, on sound
+/// within `TAKE_ONSET_RANGE_DB` of the take's loudest, comes more than a decision
+/// window before the first, that one is the take's onset.
+fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
+    let rate = f64::from(settings.sample_rate);
+    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
+    let onset = energy_onset(head, hop);
+    let block = ((0.005 * rate) as usize).max(1);
+    let powers: Vec<f32> = take
+        .chunks(block)
+        .map(|c| c.iter().map(|v| v * v).sum::<f32>() / c.len() as f32)
+        .collect();
+    let quietest = powers.iter().cloned().fold(f32::INFINITY, f32::min);
+    let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
+    if loudest.is_nan() || loudest <= 0.0 {
+        return onset;
+    }
+    // White noise of the quietest block's power (uniform in ±a has power a²/3).
+    let lead = (0.3 * rate) as usize;
+    let amplitude = (3.0 * quietest.max(loudest * 1e-9)).sqrt();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let noise: Vec<f32> = (0..lead)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
+        })
+        .collect();
+    let mut probe = SpectralMatcher::new(Vec::new(), settings);
+    let mut no_events = Vec::new();
+    probe.push(&noise, &mut no_events);
+    probe.push(take, &mut no_events);
+    probe.finish(&mut no_events);
+    let wanted = loudest * 10f32.powf(-TAKE_ONSET_RANGE_DB / 10.0);
+    // The power of the 5-10 ms from a sample on.
+    let near = |at: usize| {
+        let i = at / block;
+        powers[i.min(powers.len() - 1)].max(powers[(i + 1).min(powers.len() - 1)])
+    };
+    let decision = (settings.decision_seconds * rate) as usize;
+    probe.placed[..probe.placed_count]
+        .iter()
+        .filter_map(|&at| (at as usize).checked_sub(lead))
+        .find(|&at| at < take.len() && near(at) >= wanted)
+        .filter(|&at| at + decision < onset)
+        .unwrap_or(onset)
+}
+
+/// A streamed onset must lie on sound within this many dB of the take's loudest to be
+/// the take's: not on a breath or the room before it.
+const TAKE_ONSET_RANGE_DB: f32 = 25.0;
 
 /// First block of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `ONSET_RANGE_DB`
 /// of the loudest block of `x`.
