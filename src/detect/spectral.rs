@@ -1063,9 +1063,14 @@ fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
         powers[i.min(powers.len() - 1)].max(powers[(i + 1).min(powers.len() - 1)])
     };
     let decision = (settings.decision_seconds * rate) as usize;
+    // An onset placed a little before the take's first sample (the take was cut on its
+    // burst) is at its start.
+    let early_slack = (0.005 * rate) as usize;
     probe.placed[..probe.placed_count]
         .iter()
-        .filter_map(|&at| (at as usize).checked_sub(lead))
+        .map(|&at| at as usize)
+        .filter(|&at| at + early_slack >= lead)
+        .map(|at| at.saturating_sub(lead))
         .find(|&at| at < take.len() && near(at) >= wanted)
         .filter(|&at| at + decision < onset)
         .unwrap_or(onset)
