@@ -598,3 +598,37 @@ fn listen_in_a_terminal_prints_events_and_a_level_and_as_a_service_only_logs() {
         "{log}"
     );
 }
+
+#[test]
+fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
+    let tick = "examples/patterns/tick.wav";
+    let boom = "examples/patterns/boom.wav";
+    let same_twice = |method: &str| {
+        let a = format!("a={tick}");
+        let b = format!("b={tick}");
+        let boom = format!("boom={boom}");
+        onomato(&["check", "--method", method, "-p", &a, "-p", &b, "-p", &boom])
+    };
+    let out = same_twice("spectral");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stderr(&out);
+    assert!(
+        text.contains("warning: patterns 'a' and 'b' look alike over their first 25 ms (similarity 1.00 of 1)"),
+        "{text}"
+    );
+    assert_eq!(text.matches("warning:").count(), 1, "{text}");
+    assert!(text.contains("configuration is valid"), "{text}");
+    // The waveform method matches whole takes: no such warning.
+    let out = same_twice("waveform");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("warning:"), "{}", stderr(&out));
+    // The example's four sounds are told apart.
+    let out = onomato(&[
+        "check",
+        "--config",
+        "config/onomato.toml",
+        "--method",
+        "spectral",
+    ]);
+    assert!(!stderr(&out).contains("warning:"), "{}", stderr(&out));
+}

@@ -181,6 +181,16 @@ impl Detector {
         self.report_begins = report;
     }
 
+    /// Spectral method: pairs of patterns whose takes look alike over the decision
+    /// window (similarity at least `min_similarity`, 1 for the same), most alike first.
+    /// Empty for the waveform method.
+    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<(Arc<str>, Arc<str>, f32)> {
+        match &self.matcher {
+            Matcher::Waveform(_) => Vec::new(),
+            Matcher::Spectral(m) => m.look_alike_patterns(min_similarity),
+        }
+    }
+
     /// Longest time from an impulse's onset to its decision (`emitted_at - time`),
     /// seconds, resampling included. Held sounds end later: by the gap that ends them.
     pub fn decision_delay_bound(&self) -> f64 {

@@ -454,6 +454,39 @@ impl SpectralMatcher {
     }
 
     /// Samples per frame hop.
+    /// Pairs of patterns whose takes resemble each other over the decision window at
+    /// least as much as `min_similarity` (the score an instance of one would give the
+    /// other's take): pattern names and the best similarity of their takes, most alike
+    /// first. Such patterns are easily taken for each other.
+    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<(Arc<str>, Arc<str>, f32)> {
+        let mut pairs: Vec<(usize, usize, f32)> = Vec::new();
+        for (i, a) in self.templates.iter().enumerate() {
+            for b in &self.templates[i + 1..] {
+                if a.pattern == b.pattern {
+                    continue;
+                }
+                let (first, second) = (a.pattern.min(b.pattern), a.pattern.max(b.pattern));
+                let similarity: f32 = a.features.iter().zip(&b.features).map(|(x, y)| x * y).sum();
+                match pairs.iter_mut().find(|p| (p.0, p.1) == (first, second)) {
+                    Some(pair) => pair.2 = pair.2.max(similarity),
+                    None => pairs.push((first, second, similarity)),
+                }
+            }
+        }
+        pairs.retain(|p| p.2 >= min_similarity);
+        pairs.sort_by(|x, y| y.2.total_cmp(&x.2));
+        pairs
+            .into_iter()
+            .map(|(a, b, s)| {
+                (
+                    self.patterns[a].name.clone(),
+                    self.patterns[b].name.clone(),
+                    s,
+                )
+            })
+            .collect()
+    }
+
     /// Longest time from an impulse's onset to its decision, seconds: the decision
     /// frames and their shift, the frames the onset may be placed before its detection
     /// (the rise is looked for over 6 frames), and one window.
