@@ -28,6 +28,6 @@ for variant in waveform spectral "spectral --speech-guard 0"; do
       -p "tick=$work/tick.wav" -p "pop=$work/pop.wav" -p "pew=$work/pew.wav" -p "boom=$work/boom.wav" \
       -p "shhh=$work/shhh.wav:continuous" -p "hooo=$work/hooo.wav:continuous" | tail -n +2 | wc -l)
     awk -v m="$variant" -v t="$t" -v n="$n" -v s="$seconds" \
-      'BEGIN { printf "%-26s threshold %s: %3d events in %.0f s of speech = %.0f per minute\n", m, t, n, s, n * 60 / s }'
+      'BEGIN { printf "%-26s threshold %s: %3d events in %.1f s of speech = %.1f per minute\n", m, t, n, s, n * 60 / s }'
   done
 done
