@@ -10,6 +10,8 @@
 //! one sound); at least 40 ms since the previous onset. A few frames later the onset is
 //! placed on the samples (first 1.5 ms block within 12 dB of the loudest), and must
 //! stand 10 dB out of the 40-10 ms before it (a consonant inside speech follows a vowel).
+//! An enrolled take's onset is placed the same way, or where the onset detector would
+//! find it in a stream when that is earlier by more than a decision window ([`take_onset`]).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into one mean power spectrum (so quiet frames
@@ -1064,7 +1066,7 @@ fn take_features(
 /// the take is also run through the onset detector, after 0.3 s of noise at its own
 /// quietest level (as a stream has), and when the first onset placed there, on sound
 /// within `TAKE_ONSET_RANGE_DB` of the take's loudest, comes more than a decision
-/// window before the first, that one is the take's onset.
+/// window before the onset found on the loudest part, the take's onset is placed there.
 fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
     let rate = f64::from(settings.sample_rate);
     let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
