@@ -11,7 +11,7 @@
 //! placed on the samples (first 1.5 ms block within 12 dB of the loudest), and must
 //! stand 10 dB out of the 40-10 ms before it (a consonant inside speech follows a vowel).
 //! An enrolled take's onset is placed the same way, or where the onset detector would
-//! find it in a stream when that is earlier by more than a decision window ([`take_onset`]).
+//! find it in a stream when that is earlier by more than a decision window (`take_onset`).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into one mean power spectrum (so quiet frames
