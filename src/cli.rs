@@ -113,7 +113,7 @@ pub struct ListenArgs {
     /// Send MIDI through a virtual port of this name (overrides the config).
     #[arg(long, value_name = "NAME")]
     pub midi_virtual: Option<String>,
-    /// Run the live bounce solver (with the config's [bounce] settings, or defaults).
+    /// Run the live bounce solver (with the config's bounce settings, or defaults).
     #[arg(long)]
     pub bounce: bool,
     /// How each event is printed on stdout as it is sent.
@@ -225,7 +225,7 @@ pub enum ScoreFormat {
 pub struct EvalArgs {
     /// The recording to analyse (WAV).
     pub recording: PathBuf,
-    /// Annotation CSV with a header: onset_s,label[,end_s] (other columns are ignored).
+    /// Annotation CSV with a header: onset_s,label and optionally end_s (other columns are ignored).
     #[arg(long, value_name = "CSV")]
     pub truth: PathBuf,
     #[command(flatten)]
