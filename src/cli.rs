@@ -365,30 +365,12 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
             p.threshold
         );
     }
-    if config.detector.method == Method::Spectral {
-        let detector =
-            crate::Detector::new(patterns, &config.detector, config.detector.sample_rate)?;
-        for (a, b, similarity) in detector.look_alike_patterns(LOOK_ALIKE_SIMILARITY) {
-            let _ = writeln!(
-                err,
-                "warning: patterns '{a}' and '{b}' look alike over their first {:.0} ms \
-                 (similarity {similarity:.2} of 1): the spectral method may take one for \
-                 the other; make the sounds more different, or enrol more takes of each",
-                config.detector.decision_seconds * 1000.0
-            );
-        }
+    for warning in pattern::look_alike_patterns(patterns, &config.detector)? {
+        let _ = writeln!(err, "warning: {warning}");
     }
     let _ = writeln!(err, "configuration is valid");
     Ok(())
 }
-
-/// `check` warns of two patterns whose takes are this alike over the decision window.
-/// On the real recordings of `examples/eval_beatbox.rs` and the synthetic voice of
-/// `scripts/eval-speech.sh`, every pair at 0.74 or more was taken one for the other at
-/// times (tom and cymbal 0.86, closed and open hi-hat 0.83, kick and lip buzz 0.82,
-/// two snares 0.79, "pop" and "shhh" 0.74); of the pairs from 0.70 to 0.74, one (kick
-/// and "Pf", 0.73) seldom was; none below 0.70 was.
-const LOOK_ALIKE_SIMILARITY: f32 = 0.70;
 
 fn run_listen(args: &ListenArgs) -> anyhow::Result<()> {
     if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {

@@ -312,7 +312,8 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
             let base = path.parent().unwrap_or(Path::new("."));
             let origin = format!("config '{}'", path.display());
             let config = Config::parse(&updated, base, &origin)?;
-            crate::pattern::load_patterns(&config.patterns, &config.detector)?;
+            let patterns = crate::pattern::load_patterns(&config.patterns, &config.detector)?;
+            let look_alike = crate::pattern::look_alike_patterns(patterns, &config.detector)?;
             let temp = path.with_extension("toml.new");
             std::fs::write(&temp, updated)
                 .with_context(|| format!("cannot write '{}'", temp.display()))?;
@@ -324,6 +325,9 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
                 options.name,
                 path.display()
             );
+            for pair in look_alike.iter().filter(|l| l.involves(&options.name)) {
+                let _ = writeln!(err, "warning: {pair}");
+            }
         }
         _ => {
             let args: Vec<String> = report

@@ -173,3 +173,52 @@ fn a_file_without_a_usable_take_is_an_error_and_the_config_is_untouched() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("found 'my hum'"));
 }
+
+/// The example's take of `name`, read as mono samples at its own rate.
+fn example_take(name: &str) -> (Vec<f32>, u32) {
+    let path = root().join("examples/patterns").join(format!("{name}.wav"));
+    let mut reader = hound::WavReader::open(&path).unwrap();
+    let rate = reader.spec().sample_rate;
+    let samples = reader
+        .samples::<i16>()
+        .map(|s| f32::from(s.unwrap()) / 32768.0)
+        .collect();
+    (samples, rate)
+}
+
+#[test]
+fn record_warns_when_the_new_pattern_looks_like_one_the_spectral_method_has() {
+    let dir = temp_dir("record-alike");
+    let tick = root().join("examples/patterns/tick.wav");
+    let config = dir.join("voice.toml");
+    let text = format!(
+        "[detector]\nmethod = \"spectral\"\n\n[[pattern]]\nname = \"tick\"\ntakes = [{:?}]\n",
+        tick.to_string_lossy()
+    );
+    // "tock" is the example's "tick" said again; "boom" is another sound.
+    for (name, source, alike) in [("tock", "tick", true), ("boom", "boom", false)] {
+        std::fs::write(&config, &text).unwrap();
+        let (take, rate) = example_take(source);
+        let mut rec = vec![0.0f32; samples_for(2.0, rate)];
+        place(&mut rec, &take, samples_for(0.5, rate), 1.0);
+        add_noise(&mut rec, 0.0003, 7);
+        let input = dir.join(format!("{name}-takes.wav"));
+        write_wav_f32(&input, &rec, rate);
+        let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+            .args(["record", name, "--takes", "1", "--config"])
+            .arg(&config)
+            .arg("--input")
+            .arg(&input)
+            .output()
+            .unwrap();
+        let log = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{log}");
+        assert!(
+            log.contains(&format!("pattern '{name}' written to")),
+            "{log}"
+        );
+        let warning =
+            format!("warning: patterns 'tick' and '{name}' look alike over their first 25 ms");
+        assert_eq!(log.contains(&warning), alike, "{name}: {log}");
+    }
+}
