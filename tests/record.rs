@@ -29,6 +29,27 @@ fn voice_config(dir: &std::path::Path) -> (std::path::PathBuf, String) {
     (config, original)
 }
 
+/// Runs `onomato record ARGS --config CONFIG --input INPUT`: its exit code and log.
+fn record_with(
+    args: &[&str],
+    config: &std::path::Path,
+    input: &std::path::Path,
+) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .arg("record")
+        .args(args)
+        .arg("--config")
+        .arg(config)
+        .arg("--input")
+        .arg(input)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
 #[test]
 fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_config() {
     let dir = temp_dir("record");
@@ -56,15 +77,8 @@ fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_con
     write_wav_f32(&input, &rec, rate);
     let (config, original) = voice_config(&dir);
 
-    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
-        .args(["record", "hum", "--continuous", "--takes", "3", "--config"])
-        .arg(&config)
-        .arg("--input")
-        .arg(&input)
-        .output()
-        .unwrap();
-    let log = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(out.status.success(), "{log}");
+    let (code, log) = record_with(&["hum", "--continuous", "--takes", "3"], &config, &input);
+    assert_eq!(code, Some(0), "{log}");
     // Where each sound was found: "a-b s", within 30 ms of where it was placed.
     let span_after = |prefix: &str| -> (f64, f64) {
         let rest = log
@@ -150,15 +164,8 @@ fn a_file_without_a_usable_take_is_an_error_and_the_config_is_untouched() {
     let input = dir.join("silence.wav");
     write_wav_f32(&input, &rec, rate);
     let (config, original) = voice_config(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
-        .args(["record", "hum", "--config"])
-        .arg(&config)
-        .arg("--input")
-        .arg(&input)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let log = String::from_utf8_lossy(&out.stderr);
+    let (code, log) = record_with(&["hum"], &config, &input);
+    assert_eq!(code, Some(1));
     assert!(
         log.contains("no usable take of 'hum' was found in the input file"),
         "{log}"
@@ -204,15 +211,8 @@ fn record_warns_when_the_new_pattern_looks_like_one_the_spectral_method_has() {
         add_noise(&mut rec, 0.0003, 7);
         let input = dir.join(format!("{name}-takes.wav"));
         write_wav_f32(&input, &rec, rate);
-        let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
-            .args(["record", name, "--takes", "1", "--config"])
-            .arg(&config)
-            .arg("--input")
-            .arg(&input)
-            .output()
-            .unwrap();
-        let log = String::from_utf8_lossy(&out.stderr).to_string();
-        assert!(out.status.success(), "{log}");
+        let (code, log) = record_with(&[name, "--takes", "1"], &config, &input);
+        assert_eq!(code, Some(0), "{log}");
         assert!(
             log.contains(&format!("pattern '{name}' written to")),
             "{log}"
