@@ -140,14 +140,8 @@ fn record_from_a_file_keeps_the_good_take_refuses_the_others_and_updates_the_con
     );
 
     // Recording it again replaces its takes; it does not add a second 'hum'.
-    let again = Command::new(env!("CARGO_BIN_EXE_onomato"))
-        .args(["record", "hum", "--continuous", "--takes", "1", "--config"])
-        .arg(&config)
-        .arg("--input")
-        .arg(&input)
-        .output()
-        .unwrap();
-    assert!(again.status.success());
+    let (code, log) = record_with(&["hum", "--continuous", "--takes", "1"], &config, &input);
+    assert_eq!(code, Some(0), "{log}");
     let text = std::fs::read_to_string(&config).unwrap();
     assert_eq!(text.matches("name = \"hum\"").count(), 1, "{text}");
     assert!(
