@@ -15,8 +15,9 @@
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into one mean power spectrum (so quiet frames
-//! before the attack weigh little), in dB, floored 50 dB below its loudest band, and compared with the same of every enrolment take by correlation (so
-//! the level does not matter), allowing a shift of ±1 frame. The best pattern wins if
+//! before the attack weigh little), in dB, floored 50 dB below its loudest band, and
+//! compared with the same of every enrolment take by correlation (so the level does
+//! not matter), allowing a shift of ±1 frame. The best pattern wins if
 //! its score passes its threshold; below, the sound is none of the patterns and nothing
 //! fires. Each onset is decided once, so a sound never gives two events. A sound whose
 //! strength (its amplitude against the take's over the decision window) is below
@@ -30,8 +31,8 @@
 //!
 //! Continuous patterns: after an onset classified as one, the event is held while each
 //! frame still resembles the pattern's sustained spectrum (its mean frame after the
-//! onset, Pearson ≥ the continuous threshold, and ≥ 0.5) and stays within 20 dB of the event's
-//! loudest frame; it ends after 30 ms of frames that do not. A voiced held sound also
+//! onset, Pearson ≥ the continuous threshold, and ≥ 0.5) and stays within 20 dB of the
+//! event's loudest frame; it ends after 30 ms of frames that do not. A voiced held sound also
 //! reports its pitch (normalised autocorrelation over 100 ms of its middle, 60-500 Hz).
 //!
 //! Runs on the detector thread. FFT plan, mel bank, rings and templates are made in
@@ -364,11 +365,11 @@ struct ExtendingSpan {
 }
 /// The speech guard's unrecognised sound: this long in all...
 const GUARD_SOUND_SECONDS: f64 = 0.06;
-/// ...within this many dB of the new sound's peak. On a minute of synthetic speech
-/// (`scripts/eval-speech.sh`) with a guard of 0.5 s: 57 false events without the
-/// guard, 1 with it; on the real beatbox sets (`examples/eval_beatbox.rs`) it costs the
-/// isolated set 0.008 of F1 and rec4 (labels as given) 0.026, and gains the repeated set
-/// 0.020.
+/// ...within this many dB of the new sound's peak. On the 48 s of synthetic speech of
+/// `scripts/eval-speech.sh` with a guard of 0.5 s: 94 false events without the guard,
+/// 2 with it; on the real beatbox sets (`examples/eval_beatbox.rs`) it costs the
+/// isolated set 0.008 of F1 and rec4 (labels as given) 0.026, and leaves rec3, rec6
+/// and the repeated set as they are.
 const GUARD_DB: f32 = 10.0;
 
 impl SpectralMatcher {
@@ -389,13 +390,13 @@ impl SpectralMatcher {
             let mut power = 0.0f64;
             for take in &p.takes {
                 let onset = take_onset(&take.samples, settings, analyzer.hop);
-                let (features, early_energy, mean_frame, n, onset_in_take) =
+                let (features, early_energy, mean_frame, n) =
                     take_features(&mut analyzer, &take.samples, decision_frames, onset);
                 templates.push(Template {
                     pattern: pi,
                     features,
                     early_energy,
-                    length_after_onset: (take.samples.len() - onset_in_take) as u64,
+                    length_after_onset: (take.samples.len() - onset) as u64,
                 });
                 for (s, m) in sustain.iter_mut().zip(&mean_frame) {
                     *s += m * n as f32;
@@ -461,7 +462,6 @@ impl SpectralMatcher {
         }
     }
 
-    /// Samples per frame hop.
     /// Pairs of patterns whose takes resemble each other over the decision window at
     /// least as much as `min_similarity` (the score an instance of one would give the
     /// other's take): pattern names and the best similarity of their takes, most alike
@@ -503,6 +503,7 @@ impl SpectralMatcher {
         (frames * self.hop() + self.analyzer.win) as f64 / self.rate
     }
 
+    /// Samples per frame hop.
     fn hop(&self) -> usize {
         self.analyzer.hop
     }
@@ -1005,15 +1006,15 @@ fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f6
 }
 
 /// Features of one take from its onset (`onset_in_take`, from [`take_onset`]): runs
-/// the same analysis over the take (after a little silence) and returns the normalised decision frames, the energy of the
-/// samples in the decision window, the take's mean frame after the onset (for sustained
-/// sounds) and how many frames that mean covers.
+/// the same analysis over the take (after a little silence) and returns the normalised
+/// decision frames, the energy of the samples in the decision window, the take's mean
+/// frame after the onset (for sustained sounds) and how many frames that mean covers.
 fn take_features(
     analyzer: &mut Analyzer,
     take: &[f32],
     decision_frames: usize,
     onset_in_take: usize,
-) -> (Vec<f32>, f64, Vec<f32>, usize, usize) {
+) -> (Vec<f32>, f64, Vec<f32>, usize) {
     let hop = analyzer.hop;
     let win = analyzer.win;
     let lead = win;
@@ -1056,7 +1057,7 @@ fn take_features(
             *m += x / count as f32;
         }
     }
-    (features, early_energy, mean, count, onset_in_take)
+    (features, early_energy, mean, count)
 }
 
 /// A take's onset, in samples, placed as an instance's is on the stream: the first
