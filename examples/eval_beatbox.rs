@@ -443,24 +443,41 @@ fn main() {
         std::process::exit(2);
     }
     let wanted = |set: &str| only.is_none_or(|o| o == set);
-    let threshold = number_option(&args, "--threshold", "a number from 0 to 1")
-        .unwrap_or(DetectorSettings::default().threshold);
-    let speech_guard = number_option(&args, "--speech-guard", "a number of seconds")
-        .unwrap_or(DetectorSettings::default().speech_guard_seconds);
-    let min_strength = number_option(&args, "--min-strength", "a number from 0 to 1")
-        .unwrap_or(DetectorSettings::default().min_strength);
-    let decision_seconds = number_option(&args, "--decision-seconds", "a number of seconds")
-        .unwrap_or(DetectorSettings::default().decision_seconds);
+    // The options over the defaults, checked as a config's [detector] would be.
+    let mut base = DetectorSettings::default();
+    let options = [
+        ("--threshold", "a number from 0 to 1", &mut base.threshold),
+        (
+            "--speech-guard",
+            "a number of seconds",
+            &mut base.speech_guard_seconds,
+        ),
+        (
+            "--min-strength",
+            "a number from 0 to 1",
+            &mut base.min_strength,
+        ),
+        (
+            "--decision-seconds",
+            "a number of seconds",
+            &mut base.decision_seconds,
+        ),
+    ];
+    for (name, expected, field) in options {
+        if let Some(value) = number_option(&args, name, expected) {
+            *field = value;
+        }
+    }
+    if let Err(e) = base.validate("eval_beatbox options") {
+        eprintln!("{e}");
+        std::process::exit(2);
+    }
     println!("| set | method | F1 | precision | recall | onset F1 | latency median ms | latency p95 ms |");
     println!("|---|---|---|---|---|---|---|---|");
     for method in methods {
         let settings = DetectorSettings {
             method,
-            threshold,
-            speech_guard_seconds: speech_guard,
-            min_strength,
-            decision_seconds,
-            ..DetectorSettings::default()
+            ..base.clone()
         };
         let show = |set: &str, s: &Score| {
             row(set, method, s);
