@@ -404,3 +404,105 @@ fn sounds_far_quieter_than_the_takes_are_ignored_unless_min_strength_is_0() {
     assert_eq!(kicks_found(&any_level, &near), 4, "{any_level:#?}");
     assert_eq!(kicks_found(&any_level, &far), 4, "{any_level:#?}");
 }
+
+/// A "pop"-like sound in two parts: a snare-like burst, 120 ms of silence, and a
+/// second burst 6 dB down (the closing "p").
+fn two_part(seed: u64) -> Vec<f32> {
+    let mut x = snare(seed);
+    x.extend(vec![0.0; samples_for(0.12, RATE)]);
+    x.extend(snare(seed + 1000).iter().map(|v| v * 0.5));
+    x
+}
+
+#[test]
+fn the_later_part_of_an_enrolled_sound_is_no_second_event_but_another_hit_there_is_one() {
+    let settings = spectral();
+    let patterns = vec![
+        Pattern::from_samples("pop", PatternKind::Impulse, vec![two_part(1)], &settings).unwrap(),
+        Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
+    ];
+    // Four other two-part sounds at -6..0 dB; then four first parts each followed,
+    // where the closing burst would be, by a kick.
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let (mut pops, mut kicks) = (Vec::new(), Vec::new());
+    for i in 0..4u64 {
+        pops.push(rec.len() as f64 / f64::from(RATE));
+        let gain = 1.0 - 0.15 * i as f32;
+        rec.extend(two_part(100 + i).iter().map(|v| v * gain));
+        rec.extend(vec![0.0; samples_for(0.6, RATE)]);
+    }
+    for i in 0..4u64 {
+        pops.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(snare(200 + i));
+        rec.extend(vec![0.0; samples_for(0.12, RATE)]);
+        kicks.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(kick(300 + i));
+        rec.extend(vec![0.0; samples_for(0.6, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 14);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let found = |label: &str, times: &[f64]| {
+        times
+            .iter()
+            .filter(|&&t| {
+                events
+                    .iter()
+                    .any(|e| &*e.pattern == label && (e.time - t).abs() < 0.05)
+            })
+            .count()
+    };
+    assert_eq!(found("pop", &pops), 8, "{events:#?}");
+    assert_eq!(found("b", &kicks), 4, "{events:#?}");
+    assert_eq!(events.len(), 12, "{events:#?}");
+}
+
+/// A held "hooo" with a breathy start: 30 ms of noise 26 dB under its vowel, then the
+/// vowel (a 150 Hz buzz) for `seconds`.
+fn breathy_hoo(seconds: f64, seed: u64) -> Vec<f32> {
+    let mut x: Vec<f32> = noise_burst(RATE, 0.03, 1e9, seed)
+        .iter()
+        .map(|v| v * 0.05)
+        .collect();
+    x.extend(buzz(RATE, seconds, 150.0).iter().map(|v| v * 0.5));
+    x
+}
+
+#[test]
+fn a_held_sound_is_found_whether_its_soft_start_stands_out_of_the_noise_or_not() {
+    let settings = spectral();
+    let patterns = vec![
+        Pattern::from_samples(
+            "hoo",
+            PatternKind::Continuous,
+            vec![breathy_hoo(0.5, 1)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("k", PatternKind::Impulse, vec![snare(1)], &settings).unwrap(),
+    ];
+    // Loud (the breath stands out of the noise), then soft (it does not).
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut starts = Vec::new();
+    for gain in [1.0f32, 1.0, 0.1, 0.1] {
+        starts.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(
+            breathy_hoo(0.6, starts.len() as u64 + 10)
+                .iter()
+                .map(|v| v * gain),
+        );
+        rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+    }
+    add_noise(&mut rec, 0.001, 15);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    for t in &starts {
+        assert!(
+            events
+                .iter()
+                .any(|e| &*e.pattern == "hoo" && (e.time - t).abs() < 0.05),
+            "no hoo at {t:.3} s: {events:#?}"
+        );
+    }
+    assert_eq!(events.len(), 4, "{events:#?}");
+}

@@ -12,6 +12,9 @@
 //! stand 10 dB out of the 40-10 ms before it (a consonant inside speech follows a vowel).
 //! An enrolled take's onset is placed the same way, or where the onset detector would
 //! find it in a stream when that is earlier by more than a decision window (`take_onset`).
+//! A held sound that swells (a breathy "h" before its vowel) is placed where the stream
+//! finds it when loud, on its soft start, and when soft, on its vowel: such a take is
+//! enrolled from both (`soft_onset`).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into one mean power spectrum (so quiet frames
@@ -22,7 +25,9 @@
 //! fires. Each onset is decided once, so a sound never gives two events. A sound whose
 //! strength (its amplitude against the take's over the decision window) is below
 //! `min_strength` is not the user's (a voice across the room, a breath) and does not
-//! fire either.
+//! fire either. Nor does an onset inside the last impulse's take that the take itself
+//! has at that time, at that level (the closing "p" of a "pop"): see
+//! [`SpectralMatcher::continues_last_impulse`].
 //!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 60 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
@@ -120,6 +125,11 @@ struct Template {
     /// Length of the take from its onset, samples: how long an instance is taken to
     /// last when judging the context of the next onset.
     length_after_onset: u64,
+    /// The take's own later sounds: features as `features`, and energy over the
+    /// decision window, from every frame after the onset frame (`[k - 1]`: k frames
+    /// after it) to the end of the take.
+    later_features: Vec<f32>,
+    later_energy: Vec<f64>,
 }
 
 struct PatternInfo {
@@ -287,6 +297,11 @@ fn pool_features<'a>(k: usize, frame: impl Fn(usize) -> &'a [f32], out: &mut [f3
     normalise(out);
 }
 
+/// Similarity of two normalised feature vectors (their Pearson correlation).
+fn similarity(a: &[f32], b: &[f32]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
 /// Centres `v` and scales it to unit norm (in place); a flat vector becomes zeros.
 fn normalise(v: &mut [f32]) {
     let mean = v.iter().sum::<f32>() / v.len().max(1) as f32;
@@ -345,9 +360,23 @@ pub struct SpectralMatcher {
     /// The first onsets placed (samples), kept for [`take_onset`]'s look at a take.
     placed: [u64; PLACED_KEPT],
     placed_count: usize,
+    /// The last impulse fired, whose take may still be going on.
+    last_impulse: Option<FiredImpulse>,
+}
+
+#[derive(Clone, Copy)]
+struct FiredImpulse {
+    template: usize,
+    onset_frame: u64,
+    strength: f64,
 }
 
 const PLACED_KEPT: usize = 8;
+
+/// See [`SpectralMatcher::continues_last_impulse`].
+const CONTINUATION_SLACK_SECONDS: f64 = 0.02;
+const CONTINUATION_SIMILARITY: f32 = 0.8;
+const CONTINUATION_DB: f64 = 6.0;
 
 const RECOGNISED_SPANS: usize = 8;
 
@@ -390,14 +419,34 @@ impl SpectralMatcher {
             let mut power = 0.0f64;
             for take in &p.takes {
                 let onset = take_onset(&take.samples, settings, analyzer.hop);
-                let (features, early_energy, mean_frame, n) =
-                    take_features(&mut analyzer, &take.samples, decision_frames, onset);
-                templates.push(Template {
-                    pattern: pi,
-                    features,
-                    early_energy,
-                    length_after_onset: (take.samples.len() - onset) as u64,
-                });
+                // A held sound swells: a stream places its onset on its soft start when
+                // it stands out of the noise, later when it does not. Both are enrolled.
+                let soft = soft_onset(&take.samples, analyzer.hop);
+                let soft_first = p.kind == PatternKind::Continuous
+                    && (onset.saturating_sub(soft) as f64) > SOFT_ONSET_GAP_SECONDS * rate;
+                let starts: &[usize] = if soft_first { &[soft, onset] } else { &[onset] };
+                let mut sustained = None;
+                for &start in starts {
+                    let TakeFeatures {
+                        features,
+                        early_energy,
+                        mean_frame,
+                        mean_frames,
+                        later_features,
+                        later_energy,
+                    } = take_features(&mut analyzer, &take.samples, decision_frames, start);
+                    templates.push(Template {
+                        pattern: pi,
+                        features,
+                        early_energy,
+                        length_after_onset: (take.samples.len() - start) as u64,
+                        later_features,
+                        later_energy,
+                    });
+                    // The held spectrum is taken from the later start.
+                    sustained = Some((mean_frame, mean_frames));
+                }
+                let (mean_frame, n) = sustained.unwrap_or_default();
                 for (s, m) in sustain.iter_mut().zip(&mean_frame) {
                     *s += m * n as f32;
                 }
@@ -459,6 +508,7 @@ impl SpectralMatcher {
             min_strength: settings.min_strength,
             placed: [0; PLACED_KEPT],
             placed_count: 0,
+            last_impulse: None,
         }
     }
 
@@ -474,7 +524,7 @@ impl SpectralMatcher {
                     continue;
                 }
                 let (first, second) = (a.pattern.min(b.pattern), a.pattern.max(b.pattern));
-                let similarity: f32 = a.features.iter().zip(&b.features).map(|(x, y)| x * y).sum();
+                let similarity = similarity(&a.features, &b.features);
                 match pairs.iter_mut().find(|p| (p.0, p.1) == (first, second)) {
                     Some(pair) => pair.2 = pair.2.max(similarity),
                     None => pairs.push((first, second, similarity)),
@@ -724,12 +774,7 @@ impl SpectralMatcher {
                 &mut self.instance,
             );
             for (ti, t) in self.templates.iter().enumerate() {
-                let score: f32 = t
-                    .features
-                    .iter()
-                    .zip(&self.instance)
-                    .map(|(a, b)| a * b)
-                    .sum();
+                let score = similarity(&t.features, &self.instance);
                 if score > best_score {
                     best_score = score;
                     best_template = ti;
@@ -753,6 +798,9 @@ impl SpectralMatcher {
             return;
         }
         if self.follows_unrecognised_sound(time_sample, peak) {
+            return;
+        }
+        if self.continues_last_impulse(time_sample, onset_frame) {
             return;
         }
         let template = &self.templates[best_template];
@@ -804,6 +852,11 @@ impl SpectralMatcher {
             limit: time_sample + SPAN_STRETCH * template.length_after_onset,
         });
         self.recognised_next = (self.recognised_next + 1) % RECOGNISED_SPANS;
+        self.last_impulse = (info.kind == PatternKind::Impulse).then_some(FiredImpulse {
+            template: best_template,
+            onset_frame,
+            strength,
+        });
         if info.kind == PatternKind::Continuous {
             if let Some(h) = self.held.take() {
                 self.close_held(h, out);
@@ -820,6 +873,49 @@ impl SpectralMatcher {
             });
         }
         out.push(decided);
+    }
+
+    /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
+    /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
+    /// onset (give or take `CONTINUATION_SLACK_SECONDS`), sounds alike (similarity at
+    /// least `CONTINUATION_SIMILARITY`) at the level the impulse's strength predicts
+    /// (within `CONTINUATION_DB`).
+    fn continues_last_impulse(&mut self, time_sample: u64, onset_frame: u64) -> bool {
+        let Some(last) = self.last_impulse else {
+            return false;
+        };
+        let template = &self.templates[last.template];
+        let after = onset_frame.saturating_sub(last.onset_frame) as usize;
+        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
+        let count = template.later_energy.len();
+        if after == 0 || after > count + slack {
+            return false;
+        }
+        let cap = self.frame_capacity as u64;
+        let frames = &self.frames;
+        pool_features(
+            self.decision_frames,
+            |k| {
+                let slot = ((onset_frame + k as u64) % cap) as usize;
+                &frames[slot * BANDS..(slot + 1) * BANDS]
+            },
+            &mut self.instance,
+        );
+        let decision_len = (self.decision_frames * self.hop()) as u64;
+        let energy: f64 = (time_sample..time_sample + decision_len)
+            .filter(|&n| n < self.consumed)
+            .map(|n| f64::from(self.sample(n)).powi(2))
+            .sum();
+        for k in after.saturating_sub(slack).max(1)..=(after + slack).min(count) {
+            let features = &template.later_features[(k - 1) * FEATURES..k * FEATURES];
+            let similarity = similarity(features, &self.instance);
+            let expected = template.later_energy[k - 1] * last.strength * last.strength;
+            let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
+            if similarity >= CONTINUATION_SIMILARITY && db.abs() <= CONTINUATION_DB {
+                return true;
+            }
+        }
+        false
     }
 
     /// The frames still in the ring whose whole window lies in samples `[from, to)`.
@@ -1005,16 +1101,29 @@ fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f6
     Some(rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
 }
 
+/// What [`take_features`] finds in one take.
+struct TakeFeatures {
+    /// Normalised decision frames from the onset.
+    features: Vec<f32>,
+    /// Energy of the samples in the decision window from the onset.
+    early_energy: f64,
+    /// Mean frame after the onset (for sustained sounds)...
+    mean_frame: Vec<f32>,
+    /// ...over this many frames.
+    mean_frames: usize,
+    /// As `features` and `early_energy` from every later frame of the take.
+    later_features: Vec<f32>,
+    later_energy: Vec<f64>,
+}
+
 /// Features of one take from its onset (`onset_in_take`, from [`take_onset`]): runs
-/// the same analysis over the take (after a little silence) and returns the normalised
-/// decision frames, the energy of the samples in the decision window, the take's mean
-/// frame after the onset (for sustained sounds) and how many frames that mean covers.
+/// the same analysis over the take (after a little silence) as over a stream.
 fn take_features(
     analyzer: &mut Analyzer,
     take: &[f32],
     decision_frames: usize,
     onset_in_take: usize,
-) -> (Vec<f32>, f64, Vec<f32>, usize) {
+) -> TakeFeatures {
     let hop = analyzer.hop;
     let win = analyzer.win;
     let lead = win;
@@ -1032,21 +1141,27 @@ fn take_features(
     let onset =
         ((lead + onset_in_take).saturating_sub(win / 2) as f64 / hop as f64).round() as usize;
     let onset = onset.min(n_frames - 1);
-    let mut features = vec![0.0f32; FEATURES];
-    pool_features(
-        decision_frames,
-        |k| {
-            let f = (onset + k).min(n_frames - 1);
-            &frames[f * BANDS..(f + 1) * BANDS]
-        },
-        &mut features,
-    );
     let early_len = decision_frames * hop;
     let onset_sample = lead + onset_in_take;
-    let early_energy = padded[onset_sample..(onset_sample + early_len).min(padded.len())]
-        .iter()
-        .map(|&x| f64::from(x) * f64::from(x))
-        .sum();
+    let pooled_from = |first: usize, out: &mut [f32]| {
+        pool_features(
+            decision_frames,
+            |k| {
+                let f = (first + k).min(n_frames - 1);
+                &frames[f * BANDS..(f + 1) * BANDS]
+            },
+            out,
+        )
+    };
+    let energy_from = |start: usize| -> f64 {
+        padded[start.min(padded.len())..(start + early_len).min(padded.len())]
+            .iter()
+            .map(|&x| f64::from(x) * f64::from(x))
+            .sum()
+    };
+    let mut features = vec![0.0f32; FEATURES];
+    pooled_from(onset, &mut features);
+    let early_energy = energy_from(onset_sample);
     let take_frames_end = ((lead + take.len()).saturating_sub(win) / hop)
         .max(onset + 1)
         .min(n_frames);
@@ -1057,7 +1172,24 @@ fn take_features(
             *m += x / count as f32;
         }
     }
-    (features, early_energy, mean, count)
+    let later = count - 1;
+    let mut later_features = vec![0.0f32; later * FEATURES];
+    let mut later_energy = vec![0.0f64; later];
+    for k in 1..=later {
+        pooled_from(
+            onset + k,
+            &mut later_features[(k - 1) * FEATURES..k * FEATURES],
+        );
+        later_energy[k - 1] = energy_from(onset_sample + k * hop);
+    }
+    TakeFeatures {
+        features,
+        early_energy,
+        mean_frame: mean,
+        mean_frames: count,
+        later_features,
+        later_energy,
+    }
 }
 
 /// A take's onset, in samples, placed as an instance's is on the stream: the first
@@ -1118,6 +1250,29 @@ fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
         .filter(|&at| at + decision < onset)
         .unwrap_or(onset)
 }
+
+/// The soft start of a take: its first block of about 1.5 ms (at 22 kHz; `hop / 2`
+/// samples) within `SOFT_ONSET_RANGE_DB` of the loudest of its first 150 ms.
+fn soft_onset(take: &[f32], hop: usize) -> usize {
+    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
+    let block = (hop / 2).max(1);
+    let energies: Vec<f32> = head
+        .chunks(block)
+        .map(|c| c.iter().map(|v| v * v).sum::<f32>())
+        .collect();
+    let loudest = energies.iter().cloned().fold(0.0f32, f32::max);
+    let wanted = loudest * 10f32.powf(-SOFT_ONSET_RANGE_DB / 10.0);
+    energies
+        .iter()
+        .position(|&e| e >= wanted && e > 0.0)
+        .unwrap_or(0)
+        * block
+}
+
+/// A held sound's soft start: sound within this many dB of its loudest...
+const SOFT_ONSET_RANGE_DB: f32 = 30.0;
+/// ...that begins this long before the take's onset gets a template of its own.
+const SOFT_ONSET_GAP_SECONDS: f64 = 0.01;
 
 /// A streamed onset must lie on sound within this many dB of the take's loudest to be
 /// the take's: not on a breath or the room before it.
