@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Rebuilds the bundled example from a synthetic voice (espeak-ng) with sox:
 #   patterns/{tick,pop,boom}.wav  impulse patterns (one take each)
-#   patterns/hoo.wav              250 ms from the middle of a held "hoooo" (continuous)
+#   patterns/hoo.wav              a held "oooo" sung on one note, 0.63 s (continuous)
 #   beat.wav                      10 s: the sounds at known times and levels, in light noise
 #   beat.truth.csv                onset_s,label,end_s,gain of every sound placed in beat.wav
 # Needs: espeak-ng, sox (apt-get install espeak-ng sox).
@@ -25,9 +25,8 @@ for word in tick pop boom; do
   trim "$tmp/$word.wav" "patterns/$word.wav"
 done
 # A monotone voice (narrow pitch range), as a held "hoo" is sung on one note.
-espeak-ng -v en -m -w "$tmp/hoo-raw.wav" '<speak><prosody range="x-low">hoooooooooooo</prosody></speak>'
-trim "$tmp/hoo-raw.wav" "$tmp/hoo.wav"
-sox "$tmp/hoo.wav" patterns/hoo.wav trim 0.45 0.25
+espeak-ng -v en -m -w "$tmp/hoo-raw.wav" '<speak><prosody range="x-low">oooooooooooo</prosody></speak>'
+trim "$tmp/hoo-raw.wav" patterns/hoo.wav
 
 # start_s label gain
 timeline="0.40 tick 1.0
@@ -49,7 +48,6 @@ echo "onset_s,label,end_s,gain" > beat.truth.csv
 i=0
 while read -r start label gain; do
   src="patterns/$label.wav"
-  [ "$label" = hoo ] && src="$tmp/hoo.wav"
   sox -v "$gain" "$src" "$tmp/part$i.wav" pad "$start"
   len=$(soxi -D "$src")
   if [ "$label" = hoo ]; then

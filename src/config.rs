@@ -50,9 +50,9 @@ impl PatternKind {
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// The paper's normalised cross-correlation of raw waveforms.
-    #[default]
     Waveform,
     /// Log-mel frames matched a few tens of milliseconds after each onset.
+    #[default]
     Spectral,
 }
 
@@ -193,7 +193,7 @@ pub struct DetectorSettings {
 impl Default for DetectorSettings {
     fn default() -> Self {
         Self {
-            method: Method::Waveform,
+            method: Method::Spectral,
             sample_rate: 22_050,
             threshold: 0.5,
             continuous_threshold: 0.3,

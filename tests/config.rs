@@ -19,7 +19,7 @@ const TICK: &str = "[[pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\n";
 fn the_example_config_loads_with_its_patterns() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/onomato.toml");
     let config = Config::load(&path).expect("example config is valid");
-    assert_eq!(config.detector.method, Method::Waveform);
+    assert_eq!(config.detector.method, Method::Spectral);
     assert_eq!(config.detector.sample_rate, 22_050);
     assert_eq!(config.detector.min_strength, 0.06);
     let names: Vec<&str> = config.patterns.iter().map(|p| p.name.as_str()).collect();

@@ -50,7 +50,7 @@ fn build(pats: &[NamedSound], settings: &DetectorSettings) -> Vec<Pattern> {
 
 #[test]
 fn finds_every_placed_pattern_with_label_time_and_strength() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let (rec, placed, pats) = known_recording(0.002);
     let mut det = Detector::new(build(&pats, &settings), &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 512);
@@ -86,7 +86,7 @@ fn finds_every_placed_pattern_with_label_time_and_strength() {
 
 #[test]
 fn fft_scores_equal_the_direct_correlation() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let (rec, _, pats) = known_recording(0.002);
     let rec = &rec[..samples_for(3.0, RATE)];
     let patterns = build(&pats, &settings);
@@ -117,7 +117,7 @@ fn fft_scores_equal_the_direct_correlation() {
 
 #[test]
 fn two_different_short_patterns_30_ms_apart_are_both_found() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let pats = vec![
         ("tick", noise_burst(RATE, 0.045, 0.010, 21)),
         ("knock", noise_burst(RATE, 0.050, 0.012, 22)),
@@ -153,13 +153,13 @@ fn paper_window_suppresses_close_long_patterns_and_a_narrow_window_keeps_both() 
     place(&mut rec, &pats[1].1, a + samples_for(0.030, RATE), 0.8);
     add_noise(&mut rec, 0.002, 6);
 
-    let paper = DetectorSettings::default();
+    let paper = waveform_settings();
     let mut det = Detector::new(build(&pats, &paper), &paper, RATE).unwrap();
     assert_eq!(detect_in_blocks(&mut det, &rec, 256).len(), 1);
 
     let narrow = DetectorSettings {
         suppression_seconds: Some(0.015),
-        ..DetectorSettings::default()
+        ..waveform_settings()
     };
     let mut det = Detector::new(build(&pats, &narrow), &narrow, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 256);
@@ -170,7 +170,7 @@ fn paper_window_suppresses_close_long_patterns_and_a_narrow_window_keeps_both() 
 
 #[test]
 fn continuous_span_is_found_within_20_ms_at_each_end() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let pattern = buzz(RATE, 0.200, 140.0);
     let hum = continuous("hum", pattern, &settings);
     let tick = impulse("tick", noise_burst(RATE, 0.05, 0.012, 11), &settings);
@@ -223,7 +223,7 @@ fn continuous_span_is_found_within_20_ms_at_each_end() {
 
 #[test]
 fn a_recording_without_the_patterns_gives_no_event() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let pats = three_impulses();
     let hum = continuous("hum", buzz(RATE, 0.2, 140.0), &settings);
     let mut patterns = build(&pats, &settings);
@@ -249,7 +249,7 @@ fn a_recording_without_the_patterns_gives_no_event() {
 
 #[test]
 fn silence_and_digital_zero_give_no_event() {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let pats = three_impulses();
     let mut det = Detector::new(build(&pats, &settings), &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &vec![0.0; samples_for(3.0, RATE)], 512);
@@ -257,7 +257,7 @@ fn silence_and_digital_zero_give_no_event() {
 }
 
 fn mixed_scene() -> (Vec<f32>, Vec<Pattern>, DetectorSettings) {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let (mut rec, _, pats) = known_recording(0.002);
     place(
         &mut rec,

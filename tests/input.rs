@@ -35,8 +35,11 @@ fn config_for(dir: &Path, tick: &[f32], pop: &[f32]) -> Config {
         takes: vec![path],
         ..PatternSpec::default()
     };
+    // The paper's method places exact copies to the sample, so every format can be
+    // held to 1 ms.
     Config {
         patterns: vec![spec("tick", tick_path), spec("pop", pop_path)],
+        detector: waveform_settings(),
         ..Config::default()
     }
 }

@@ -64,6 +64,7 @@ pub enum OutputMessage {
 /// What the output thread did, returned when it ends.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct OutputReport {
+    /// Sounds sent: impulses, and held sounds counted once (at their begin).
     pub events: u64,
     pub osc: osc::OscCounters,
     pub midi: midi::MidiCounters,
@@ -155,7 +156,12 @@ pub fn run(
         let message = rx.recv_timeout(wake.saturating_duration_since(now));
         match message {
             Ok(OutputMessage::Event(e)) => {
-                report.events += 1;
+                let ends_an_open_sound = e.kind == PatternKind::Continuous
+                    && e.end.is_some()
+                    && open.iter().any(|o| o.id == e.id);
+                if !ends_an_open_sound {
+                    report.events += 1;
+                }
                 let begin_sent = match (e.kind, e.end) {
                     (PatternKind::Continuous, None) => {
                         open.push(e.clone());

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use onomato::config::{DetectorSettings, PatternKind};
+use onomato::config::{DetectorSettings, Method, PatternKind};
 use onomato::Pattern;
 
 pub const RATE: u32 = 22_050;
@@ -153,6 +153,14 @@ pub fn write_wav_int(path: &Path, frames: &[Vec<f32>], rate: u32, bits: u16) {
         }
     }
     w.finalize().expect("finalize wav");
+}
+
+/// The defaults with the paper's method, for the tests that pin it down.
+pub fn waveform_settings() -> DetectorSettings {
+    DetectorSettings {
+        method: Method::Waveform,
+        ..DetectorSettings::default()
+    }
 }
 
 pub fn impulse(name: &str, samples: Vec<f32>, settings: &DetectorSettings) -> Pattern {
