@@ -762,17 +762,7 @@ impl SpectralMatcher {
         let mut best_template = 0usize;
         let mut best_score = f32::NEG_INFINITY;
         for shift in 0..=2 * MAX_SHIFT {
-            let first = (onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64);
-            let frames = &self.frames;
-            let cap = self.frame_capacity as u64;
-            pool_features(
-                self.decision_frames,
-                |k| {
-                    let slot = ((first + k as u64) % cap) as usize;
-                    &frames[slot * BANDS..(slot + 1) * BANDS]
-                },
-                &mut self.instance,
-            );
+            self.pool_instance((onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64));
             for (ti, t) in self.templates.iter().enumerate() {
                 let score = similarity(&t.features, &self.instance);
                 if score > best_score {
@@ -875,6 +865,21 @@ impl SpectralMatcher {
         out.push(decided);
     }
 
+    /// Pools the decision frames from frame `first` (still in the ring) into
+    /// `self.instance`.
+    fn pool_instance(&mut self, first: u64) {
+        let cap = self.frame_capacity as u64;
+        let frames = &self.frames;
+        pool_features(
+            self.decision_frames,
+            |k| {
+                let slot = ((first + k as u64) % cap) as usize;
+                &frames[slot * BANDS..(slot + 1) * BANDS]
+            },
+            &mut self.instance,
+        );
+    }
+
     /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
     /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
     /// onset (give or take `CONTINUATION_SLACK_SECONDS`), sounds alike (similarity at
@@ -884,23 +889,14 @@ impl SpectralMatcher {
         let Some(last) = self.last_impulse else {
             return false;
         };
-        let template = &self.templates[last.template];
         let after = onset_frame.saturating_sub(last.onset_frame) as usize;
         let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
-        let count = template.later_energy.len();
+        let count = self.templates[last.template].later_energy.len();
         if after == 0 || after > count + slack {
             return false;
         }
-        let cap = self.frame_capacity as u64;
-        let frames = &self.frames;
-        pool_features(
-            self.decision_frames,
-            |k| {
-                let slot = ((onset_frame + k as u64) % cap) as usize;
-                &frames[slot * BANDS..(slot + 1) * BANDS]
-            },
-            &mut self.instance,
-        );
+        self.pool_instance(onset_frame);
+        let template = &self.templates[last.template];
         let decision_len = (self.decision_frames * self.hop()) as u64;
         let energy: f64 = (time_sample..time_sample + decision_len)
             .filter(|&n| n < self.consumed)
