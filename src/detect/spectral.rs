@@ -14,7 +14,7 @@
 //! find it in a stream when that is earlier by more than a decision window (`take_onset`).
 //! A held sound that swells (a breathy "h" before its vowel) is placed where the stream
 //! finds it when loud, on its soft start, and when soft, on its vowel: such a take is
-//! enrolled from both (`soft_onset`).
+//! enrolled from both (`first_block_within`, `SOFT_ONSET_RANGE_DB`).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into one mean power spectrum (so quiet frames
@@ -27,7 +27,7 @@
 //! `min_strength` is not the user's (a voice across the room, a breath) and does not
 //! fire either. Nor does an onset inside the last impulse's take that the take itself
 //! has at that time, at that level (the closing "p" of a "pop"): see
-//! [`SpectralMatcher::continues_last_impulse`].
+//! `SpectralMatcher::continues_last_impulse`.
 //!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 60 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
@@ -421,7 +421,7 @@ impl SpectralMatcher {
                 let onset = take_onset(&take.samples, settings, analyzer.hop);
                 // A held sound swells: a stream places its onset on its soft start when
                 // it stands out of the noise, later when it does not. Both are enrolled.
-                let soft = soft_onset(&take.samples, analyzer.hop);
+                let soft = first_block_within(&take.samples, analyzer.hop, SOFT_ONSET_RANGE_DB);
                 let soft_first = p.kind == PatternKind::Continuous
                     && (onset.saturating_sub(soft) as f64) > SOFT_ONSET_GAP_SECONDS * rate;
                 let starts: &[usize] = if soft_first { &[soft, onset] } else { &[onset] };
@@ -805,11 +805,7 @@ impl SpectralMatcher {
                 return;
             }
         }
-        let decision_len = (self.decision_frames * self.hop()) as u64;
-        let early: f64 = (time_sample..time_sample + decision_len)
-            .filter(|&n| n < self.consumed)
-            .map(|n| f64::from(self.sample(n)).powi(2))
-            .sum();
+        let early = self.decision_window_energy(time_sample);
         let strength = (early / template.early_energy.max(1e-12)).sqrt();
         if strength < self.min_strength {
             return;
@@ -865,6 +861,16 @@ impl SpectralMatcher {
         out.push(decided);
     }
 
+    /// Energy of the samples (received so far) of the decision window from
+    /// `time_sample`.
+    fn decision_window_energy(&self, time_sample: u64) -> f64 {
+        let decision_len = (self.decision_frames * self.hop()) as u64;
+        (time_sample..time_sample + decision_len)
+            .filter(|&n| n < self.consumed)
+            .map(|n| f64::from(self.sample(n)).powi(2))
+            .sum()
+    }
+
     /// Pools the decision frames from frame `first` (still in the ring) into
     /// `self.instance`.
     fn pool_instance(&mut self, first: u64) {
@@ -897,11 +903,7 @@ impl SpectralMatcher {
         }
         self.pool_instance(onset_frame);
         let template = &self.templates[last.template];
-        let decision_len = (self.decision_frames * self.hop()) as u64;
-        let energy: f64 = (time_sample..time_sample + decision_len)
-            .filter(|&n| n < self.consumed)
-            .map(|n| f64::from(self.sample(n)).powi(2))
-            .sum();
+        let energy = self.decision_window_energy(time_sample);
         for k in after.saturating_sub(slack).max(1)..=(after + slack).min(count) {
             let features = &template.later_features[(k - 1) * FEATURES..k * FEATURES];
             let similarity = similarity(features, &self.instance);
@@ -1198,8 +1200,7 @@ fn take_features(
 /// window before the onset found on the loudest part, the take's onset is placed there.
 fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
     let rate = f64::from(settings.sample_rate);
-    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
-    let onset = energy_onset(head, hop);
+    let onset = first_block_within(take, hop, ONSET_RANGE_DB as f32);
     let block = ((0.005 * rate) as usize).max(1);
     let powers: Vec<f32> = take
         .chunks(block)
@@ -1247,24 +1248,6 @@ fn take_onset(take: &[f32], settings: &DetectorSettings, hop: usize) -> usize {
         .unwrap_or(onset)
 }
 
-/// The soft start of a take: its first block of about 1.5 ms (at 22 kHz; `hop / 2`
-/// samples) within `SOFT_ONSET_RANGE_DB` of the loudest of its first 150 ms.
-fn soft_onset(take: &[f32], hop: usize) -> usize {
-    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
-    let block = (hop / 2).max(1);
-    let energies: Vec<f32> = head
-        .chunks(block)
-        .map(|c| c.iter().map(|v| v * v).sum::<f32>())
-        .collect();
-    let loudest = energies.iter().cloned().fold(0.0f32, f32::max);
-    let wanted = loudest * 10f32.powf(-SOFT_ONSET_RANGE_DB / 10.0);
-    energies
-        .iter()
-        .position(|&e| e >= wanted && e > 0.0)
-        .unwrap_or(0)
-        * block
-}
-
 /// A held sound's soft start: sound within this many dB of its loudest...
 const SOFT_ONSET_RANGE_DB: f32 = 30.0;
 /// ...that begins this long before the take's onset gets a template of its own.
@@ -1274,15 +1257,17 @@ const SOFT_ONSET_GAP_SECONDS: f64 = 0.01;
 /// the take's: not on a breath or the room before it.
 const TAKE_ONSET_RANGE_DB: f32 = 25.0;
 
-/// First block of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `ONSET_RANGE_DB`
-/// of the loudest block of `x`.
-fn energy_onset(x: &[f32], hop: usize) -> usize {
+/// First block of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `range_db` of
+/// the loudest block of the first 150 ms of `take`: its onset (`ONSET_RANGE_DB`), or
+/// its soft start (`SOFT_ONSET_RANGE_DB`).
+fn first_block_within(take: &[f32], hop: usize, range_db: f32) -> usize {
+    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
     let block = (hop / 2).max(1);
-    let mut energies = x
+    let mut energies = head
         .chunks(block)
         .map(|c| c.iter().map(|v| v * v).sum::<f32>());
     let loudest = energies.clone().fold(0.0f32, f32::max);
-    let wanted = loudest * 10f32.powf(-ONSET_RANGE_DB as f32 / 10.0);
+    let wanted = loudest * 10f32.powf(-range_db / 10.0);
     energies
         .position(|e| e >= wanted && e > 0.0)
         .map_or(0, |i| i * block)
