@@ -13,7 +13,7 @@ use std::time::Duration;
 use common::*;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use onomato::analyze::{analyze_file, detect_in_blocks};
-use onomato::config::{Config, DetectorSettings, PatternKind, PatternSpec};
+use onomato::config::{Config, DetectorSettings, Method, PatternKind, PatternSpec};
 use onomato::detect::waveform::direct_ncc;
 use onomato::{Detector, Pattern};
 
@@ -73,7 +73,7 @@ fn patterns(bank: &[(String, Vec<f32>)], n: usize, settings: &DetectorSettings) 
 }
 
 fn bench_detector(c: &mut Criterion) {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let bank = pattern_bank();
     let rec = recording(&bank);
     let mut group = c.benchmark_group("waveform_15s");
@@ -109,7 +109,7 @@ fn bench_detector(c: &mut Criterion) {
 /// time per second of audio on both lengths shows that per-block work does not grow.
 fn bench_spectral(c: &mut Criterion) {
     let settings = DetectorSettings {
-        method: onomato::config::Method::Spectral,
+        method: Method::Spectral,
         ..DetectorSettings::default()
     };
     let bank = pattern_bank();
@@ -140,7 +140,7 @@ fn bench_spectral(c: &mut Criterion) {
 /// One pattern of growing length: the direct cost grows with the length, the FFT cost
 /// with its logarithm.
 fn bench_length_sweep(c: &mut Criterion) {
-    let settings = DetectorSettings::default();
+    let settings = waveform_settings();
     let mut group = c.benchmark_group("length_sweep_15s");
     group.sample_size(10);
     group.warm_up_time(Duration::from_millis(100));
@@ -182,16 +182,25 @@ fn bench_analyze_file(c: &mut Criterion) {
                 ..PatternSpec::default()
             }
         })
-        .collect();
-    let config = Config {
-        patterns: specs,
-        ..Config::default()
-    };
+        .collect::<Vec<_>>();
     let mut group = c.benchmark_group("analyze_file_15s_44k");
     group.sample_size(20);
-    group.bench_function("8_patterns", |b| {
-        b.iter(|| black_box(analyze_file(&rec_path, &config).unwrap()))
-    });
+    for (label, method) in [
+        ("waveform", Method::Waveform),
+        ("spectral", Method::Spectral),
+    ] {
+        let config = Config {
+            patterns: specs.clone(),
+            detector: DetectorSettings {
+                method,
+                ..DetectorSettings::default()
+            },
+            ..Config::default()
+        };
+        group.bench_function(BenchmarkId::new("8_patterns", label), |b| {
+            b.iter(|| black_box(analyze_file(&rec_path, &config).unwrap()))
+        });
+    }
     group.finish();
 }
 
