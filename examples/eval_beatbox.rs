@@ -444,9 +444,12 @@ fn main() {
     }
     let wanted = |set: &str| only.is_none_or(|o| o == set);
     // The options over the defaults, checked as a config's [detector] would be.
-    let mut base = DetectorSettings::default();
+    // Without --threshold, each method uses its own default.
+    let mut base = DetectorSettings {
+        threshold: number_option(&args, "--threshold", "a number from 0 to 1"),
+        ..DetectorSettings::default()
+    };
     let options = [
-        ("--threshold", "a number from 0 to 1", &mut base.threshold),
         (
             "--speech-guard",
             "a number of seconds",

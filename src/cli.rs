@@ -250,7 +250,7 @@ impl PatternSource {
             config.detector.method = method;
         }
         if let Some(threshold) = self.threshold {
-            config.detector.threshold = threshold;
+            config.detector.threshold = Some(threshold);
         }
         if let Some(channel) = self.channel {
             config.detector.channel = Some(channel);

@@ -56,6 +56,19 @@ pub enum Method {
     Spectral,
 }
 
+impl Method {
+    /// Match threshold of patterns when none is configured: the paper's 0.5 for its
+    /// correlation of waveforms; 0.3 for the spectral method, whose weighted cepstral
+    /// similarity runs lower (see the README's accuracy table for how it trades misses
+    /// for false triggers).
+    pub fn default_threshold(self) -> f64 {
+        match self {
+            Method::Waveform => 0.5,
+            Method::Spectral => 0.3,
+        }
+    }
+}
+
 /// Bounce style of a contact.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -166,8 +179,9 @@ pub struct DetectorSettings {
     pub method: Method,
     /// Working sample rate: every input is resampled to it.
     pub sample_rate: u32,
-    /// Match threshold for patterns that do not set their own (paper: 0.5).
-    pub threshold: f64,
+    /// Match threshold for patterns that do not set their own; `None`: the method's
+    /// default ([`Method::default_threshold`]). Read it with [`Self::threshold`].
+    pub threshold: Option<f64>,
     /// Lower threshold that holds a continuous event (on the smoothed match score).
     pub continuous_threshold: f64,
     /// Half-width of the window in which a greater match suppresses an instance.
@@ -195,7 +209,7 @@ impl Default for DetectorSettings {
         Self {
             method: Method::Spectral,
             sample_rate: 22_050,
-            threshold: 0.5,
+            threshold: None,
             continuous_threshold: 0.3,
             suppression_seconds: None,
             max_pattern_seconds: 5.0,
@@ -494,7 +508,7 @@ impl RawConfig {
         let detector = DetectorSettings {
             method: d.method.unwrap_or(defaults.method),
             sample_rate: d.sample_rate.unwrap_or(defaults.sample_rate),
-            threshold: d.threshold.unwrap_or(defaults.threshold),
+            threshold: d.threshold,
             continuous_threshold: d
                 .continuous_threshold
                 .unwrap_or(defaults.continuous_threshold),
@@ -802,7 +816,7 @@ fn check_thresholds(
     if spec.kind != PatternKind::Continuous {
         return Ok(());
     }
-    let high = spec.threshold.unwrap_or(detector.threshold);
+    let high = spec.threshold.unwrap_or(detector.threshold());
     let low = spec
         .continuous_threshold
         .unwrap_or(detector.continuous_threshold);
@@ -819,6 +833,12 @@ fn check_thresholds(
 pub const MAX_SPEECH_GUARD_SECONDS: f64 = 1.0;
 
 impl DetectorSettings {
+    /// Match threshold for patterns that do not set their own.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+            .unwrap_or_else(|| self.method.default_threshold())
+    }
+
     /// Checks every field; `origin` names the source in messages.
     pub fn validate(&self, origin: &str) -> Result<(), ConfigError> {
         let item = format!("{origin}, [detector]");
@@ -831,7 +851,9 @@ impl DetectorSettings {
                 ),
             ));
         }
-        check_unit_interval(&item, "threshold", self.threshold)?;
+        if let Some(t) = self.threshold {
+            check_unit_interval(&item, "threshold", t)?;
+        }
         check_unit_interval(&item, "continuous_threshold", self.continuous_threshold)?;
         if let Some(s) = self.suppression_seconds {
             if !(s.is_finite() && (0.0..=5.0).contains(&s)) {

@@ -69,7 +69,7 @@ impl Pattern {
             name: Arc::from(spec.name.as_str()),
             kind: spec.kind,
             takes,
-            threshold: spec.threshold.unwrap_or(settings.threshold),
+            threshold: spec.threshold.unwrap_or(settings.threshold()),
             continuous_threshold: spec
                 .continuous_threshold
                 .unwrap_or(settings.continuous_threshold),
@@ -97,7 +97,7 @@ impl Pattern {
             name: Arc::from(name),
             kind,
             takes,
-            threshold: settings.threshold,
+            threshold: settings.threshold(),
             continuous_threshold: settings.continuous_threshold,
         })
     }
