@@ -169,7 +169,22 @@ fn load_beat(dir: &Path, name: &str) -> (Audio, Vec<Annotation>) {
     (rec, truth)
 }
 
-fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
+/// With `--verbose`: how alike the enrolled takes of `set` are, pair by pair, as
+/// `onomato check` measures them (spectral method), most alike first.
+fn print_look_alikes(set: &str, patterns: &[Pattern], settings: &DetectorSettings) {
+    if settings.method != Method::Spectral {
+        return;
+    }
+    let detector = Detector::new(patterns.to_vec(), settings, settings.sample_rate).unwrap();
+    let pairs: Vec<String> = detector
+        .look_alike_patterns(f32::NEG_INFINITY)
+        .iter()
+        .map(|(a, b, s)| format!("{a}/{b} {s:.2}"))
+        .collect();
+    eprintln!("{set}: take similarity {}", pairs.join(", "));
+}
+
+fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String, Score)> {
     let load = |name: &str| load_beat(dir, name);
     let labels = |truth: &[Annotation]| {
         let mut l: Vec<String> = truth.iter().map(|t| t.label.clone()).collect();
@@ -190,6 +205,9 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
             ))
         })
         .collect();
+    if verbose {
+        print_look_alikes("rsalazar_rec2 takes", &enrol2, settings);
+    }
     let mut out = Vec::new();
     for name in ["rsalazar_rec3", "rsalazar_rec4"] {
         let (rec, truth) = load(name);
@@ -225,6 +243,9 @@ fn beats(dir: &Path, settings: &DetectorSettings) -> Vec<(String, Score)> {
             enrol6.push(pattern(l, &take, rec6.rate, settings));
         }
     }
+    if verbose {
+        print_look_alikes("rsalazar_rec6 takes", &enrol6, settings);
+    }
     out.push((
         "rsalazar_rec6".to_string(),
         run(&enrol6, settings, &rec6, &truth6),
@@ -259,7 +280,7 @@ fn repeated_onsets(rec: &Audio) -> Vec<f64> {
 
 /// repeated/: the first instance of every file is enrolled (one pattern per sound);
 /// each file must give its own label at every repetition. Files are scored together.
-fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
+fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
     let sounds = ["bass", "cymbal", "hi-hat", "snare", "tom"];
     let mut recs = Vec::new();
     let mut patterns = Vec::new();
@@ -278,6 +299,9 @@ fn repeated(dir: &Path, settings: &DetectorSettings) -> Score {
             patterns.push(pattern(&label, &take, rec.rate, settings));
         }
         recs.push((rec, truth));
+    }
+    if verbose {
+        print_look_alikes("repeated takes", &patterns, settings);
     }
     // One score over all files: each file's times are moved to their own 1000 s slot.
     let mut all_events = Vec::new();
@@ -499,14 +523,14 @@ fn main() {
             );
         }
         if wanted("beats") {
-            for (name, s) in beats(&dir, &settings) {
+            for (name, s) in beats(&dir, &settings, verbose) {
                 show(&name, &s);
             }
         }
         if wanted("repeated") {
             show(
                 "repeated (5 sounds, 56 repetitions)",
-                &repeated(&dir, &settings),
+                &repeated(&dir, &settings, verbose),
             );
         }
     }
