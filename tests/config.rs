@@ -41,6 +41,22 @@ fn the_example_config_loads_with_its_patterns() {
 }
 
 #[test]
+fn the_threshold_left_out_is_the_methods_own_and_one_written_is_kept() {
+    let parse = |text: &str| Config::parse(text, Path::new("."), "config 'test.toml'").unwrap();
+    let spectral = parse(TICK);
+    assert_eq!(spectral.detector.threshold(), 0.3);
+    let mut waveform = parse(&format!("[detector]\nmethod = \"waveform\"\n{TICK}"));
+    assert_eq!(waveform.detector.threshold(), 0.5);
+    // A method chosen later (as --method does) brings its own default along...
+    waveform.detector.method = Method::Spectral;
+    assert_eq!(waveform.detector.threshold(), 0.3);
+    // ...but not over a threshold that was written.
+    let mut written = parse(&format!("[detector]\nthreshold = 0.6\n{TICK}"));
+    written.detector.method = Method::Waveform;
+    assert_eq!(written.detector.threshold(), 0.6);
+}
+
+#[test]
 fn unknown_keys_are_errors_that_name_the_key() {
     let msg = parse_err("[detector]\ntreshold = 0.5\n");
     assert!(
