@@ -299,8 +299,9 @@ fn cepstrum_basis() -> Vec<f32> {
 /// power spectrum (in dB), floors it, and turns it into weighted cepstral coefficients
 /// of unit norm (`basis` from [`cepstrum_basis`]). Averaging powers rather than dB
 /// lets the loud frames of the attack lead: on the real recordings of
-/// `examples/eval_beatbox.rs` it raised the F1 of rec6 from 0.39 to 0.43 and of the
-/// repeated set from 0.66 to 0.71 (isolated, rec3 unchanged). One spectrum over the
+/// `examples/eval_beatbox.rs` (with plain correlations, before `LIFTER_POWER`) it
+/// raised the F1 of rec6 from 0.39 to 0.43 and of the repeated set from 0.66 to 0.71
+/// (isolated, rec3 unchanged). One spectrum over the
 /// whole window scored best: finer time detail (2 or 3 sub-windows) follows the
 /// articulation of one take too closely.
 fn pool_features<'a>(k: usize, frame: impl Fn(usize) -> &'a [f32], basis: &[f32], out: &mut [f32]) {
@@ -339,15 +340,8 @@ fn similarity(a: &[f32], b: &[f32]) -> f32 {
 /// Centres `v` and scales it to unit norm (in place); a flat vector becomes zeros.
 fn normalise(v: &mut [f32]) {
     let mean = v.iter().sum::<f32>() / v.len().max(1) as f32;
-    let mut norm = 0.0f32;
-    for x in v.iter_mut() {
-        *x -= mean;
-        norm += *x * *x;
-    }
-    let norm = norm.sqrt();
-    for x in v.iter_mut() {
-        *x = if norm > 1e-9 { *x / norm } else { 0.0 };
-    }
+    v.iter_mut().for_each(|x| *x -= mean);
+    scale_to_unit(v);
 }
 
 /// Streaming spectral matcher.
@@ -462,10 +456,9 @@ struct ExtendingSpan {
 /// The speech guard's unrecognised sound: this long in all...
 const GUARD_SOUND_SECONDS: f64 = 0.06;
 /// ...within this many dB of the new sound's peak. On the 48 s of synthetic speech of
-/// `scripts/eval-speech.sh` with a guard of 0.5 s: 94 false events without the guard,
-/// 2 with it; on the real beatbox sets (`examples/eval_beatbox.rs`) it costs the
-/// isolated set 0.008 of F1 and rec4 (labels as given) 0.026, and leaves rec3, rec6
-/// and the repeated set as they are.
+/// `scripts/eval-speech.sh` with a guard of 0.5 s (threshold 0.3): 104 false events
+/// without the guard, 2 with it; on the real beatbox sets (`examples/eval_beatbox.rs`)
+/// it costs the isolated set 0.008 of F1 and leaves the others as they are.
 const GUARD_DB: f32 = 10.0;
 
 impl SpectralMatcher {
