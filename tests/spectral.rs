@@ -577,3 +577,39 @@ fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
     let events = run(&alone);
     assert!(events.iter().all(|e| &*e.pattern != "pew"), "{events:#?}");
 }
+
+#[test]
+fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
+    // The lips or the tongue often click faintly (here 40 dB under the hit) tens of
+    // milliseconds before a hit: the click is an onset of its own, too faint to fire,
+    // and the hit after it must still be found, on its own onset.
+    let settings = spectral();
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for i in 0..12u64 {
+        let label = ["b", "ts", "k"][(i % 3) as usize];
+        let lead = [0.03, 0.045, 0.06, 0.08][(i / 3) as usize];
+        let click = noise_burst(RATE, 0.004, 0.002, 500 + i);
+        rec.extend(click.iter().map(|v| v * 0.02));
+        rec.extend(vec![0.0; samples_for(lead, RATE) - click.len()]);
+        truth.push(Annotation {
+            onset: rec.len() as f64 / f64::from(RATE),
+            label: label.into(),
+            end: None,
+        });
+        rec.extend(maker(label)(300 + i));
+        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    }
+    add_noise(&mut rec, 0.0002, 9);
+    let events = detect(&settings, &rec, 256);
+    let s = score(&events, &truth, 0.05);
+    assert_eq!(
+        (s.overall.true_positives, events.len()),
+        (truth.len(), truth.len()),
+        "{}\n{events:#?}",
+        onomato::eval::render_text(&s)
+    );
+    for (e, t) in events.iter().zip(&truth) {
+        assert!((e.time - t.onset).abs() <= 0.005, "{e:?} for {t:?}");
+    }
+}
