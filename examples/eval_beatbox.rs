@@ -145,17 +145,22 @@ fn label_name(label: &str) -> String {
         .collect()
 }
 
-/// The first instance of `label` in `rec`, cut from 20 ms before its onset to the next
-/// onset (at most 300 ms).
+/// The first instance of `label` in `rec`, cut by [`cut_at`].
 fn cut_first(rec: &Audio, truth: &[Annotation], label: &str) -> Option<Vec<f32>> {
     let i = truth.iter().position(|t| t.label == label)?;
+    Some(cut_at(rec, truth, i))
+}
+
+/// Instance `i` of `truth` in `rec`, cut from 20 ms before its onset to the next onset
+/// (at most 300 ms).
+fn cut_at(rec: &Audio, truth: &[Annotation], i: usize) -> Vec<f32> {
     let rate = f64::from(rec.rate);
     let start = ((truth[i].onset - 0.02).max(0.0) * rate) as usize;
     let next = truth
         .get(i + 1)
         .map_or(truth[i].onset + 0.3, |t| t.onset - 0.01);
     let end = ((next.min(truth[i].onset + 0.3)) * rate) as usize;
-    Some(rec.samples[start..end.min(rec.samples.len())].to_vec())
+    rec.samples[start..end.min(rec.samples.len())].to_vec()
 }
 
 /// A beat take from `beats/` and its annotation, labels reduced to letters and digits.
@@ -182,6 +187,75 @@ fn print_look_alikes(set: &str, patterns: &[Pattern], settings: &DetectorSetting
         .map(|(a, b, s)| format!("{a}/{b} {s:.2}"))
         .collect();
     eprintln!("{set}: take similarity {}", pairs.join(", "));
+}
+
+/// With `--verbose`: how alike the annotated instances of `recs` are, label by label, as
+/// `onomato check` measures takes (spectral method): every instance is cut as a take
+/// (`cut_at`), and for each label the mean similarity of two of its instances is printed
+/// beside its mean similarity to the instances of the two most alike other labels. Two
+/// labels whose instances are as alike across as within are one sound to any detector
+/// that decides from the same opening.
+fn print_label_similarity(
+    name: &str,
+    recs: &[(&Audio, &[Annotation])],
+    settings: &DetectorSettings,
+) {
+    if settings.method != Method::Spectral {
+        return;
+    }
+    // Instance `i` of them all is the pattern named `i`.
+    let truth: Vec<&Annotation> = recs.iter().flat_map(|(_, t)| t.iter()).collect();
+    let mut instances = Vec::new();
+    for (rec, rec_truth) in recs {
+        for i in 0..rec_truth.len() {
+            let name = instances.len().to_string();
+            let take = resample_clip(&cut_at(rec, rec_truth, i), rec.rate, settings.sample_rate);
+            instances.push(take.ok().and_then(|take| {
+                Pattern::from_samples(&name, PatternKind::Impulse, vec![take], settings).ok()
+            }));
+        }
+    }
+    let instances: Vec<Pattern> = instances.into_iter().flatten().collect();
+    let Ok(detector) = Detector::new(instances, settings, settings.sample_rate) else {
+        return;
+    };
+    let label = |name: &str| {
+        name.parse::<usize>()
+            .map(|i| truth[i].label.clone())
+            .unwrap()
+    };
+    let mut sums: std::collections::BTreeMap<(String, String), (f64, usize)> = Default::default();
+    for (a, b, s) in detector.look_alike_patterns(f32::NEG_INFINITY) {
+        let (la, lb) = (label(&a), label(&b));
+        for key in [(la.clone(), lb.clone()), (lb, la)] {
+            let entry = sums.entry(key).or_default();
+            entry.0 += f64::from(s);
+            entry.1 += 1;
+        }
+    }
+    let mean = |a: &str, b: &str| {
+        sums.get(&(a.to_string(), b.to_string()))
+            .map(|(sum, n)| sum / *n as f64)
+    };
+    let mut labels: Vec<String> = truth.iter().map(|t| t.label.clone()).collect();
+    labels.sort();
+    labels.dedup();
+    eprintln!("{name}: mean similarity of two instances, within a label / with the nearest labels");
+    for l in &labels {
+        let mut others: Vec<(String, f64)> = labels
+            .iter()
+            .filter(|o| *o != l)
+            .filter_map(|o| Some((o.clone(), mean(l, o)?)))
+            .collect();
+        others.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let within = mean(l, l).map_or("-".into(), |m| format!("{m:.2}"));
+        let nearest: Vec<String> = others
+            .iter()
+            .take(2)
+            .map(|(o, m)| format!("{o} {m:.2}"))
+            .collect();
+        eprintln!("  {l:<4} {within} / {}", nearest.join(", "));
+    }
 }
 
 fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String, Score)> {
@@ -245,6 +319,7 @@ fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String,
     }
     if verbose {
         print_look_alikes("rsalazar_rec6 takes", &enrol6, settings);
+        print_label_similarity("rsalazar_rec6 instances", &[(&rec6, &truth6)], settings);
     }
     out.push((
         "rsalazar_rec6".to_string(),
@@ -302,6 +377,9 @@ fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
     }
     if verbose {
         print_look_alikes("repeated takes", &patterns, settings);
+        let all: Vec<(&Audio, &[Annotation])> =
+            recs.iter().map(|(r, t)| (r, t.as_slice())).collect();
+        print_label_similarity("repeated instances", &all, settings);
     }
     // One score over all files: each file's times are moved to their own 1000 s slot.
     let mut all_events = Vec::new();
