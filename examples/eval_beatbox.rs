@@ -22,19 +22,22 @@
 //!   enrolled, and every repetition must be found with its own file's label. Onsets
 //!   come from a simple energy rule (`repeated_onsets`), as the files have no labels.
 //!
-//! Scores: `onomato::eval` (label and onset within 50 ms, one to one).
+//! Scores: `onomato::eval` (label and onset within 50 ms, one to one). Every recording
+//! is detected in blocks of 256 samples, and again in blocks of 64 and 1024, which must
+//! give the very same events.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use common::Rng;
 use onomato::analyze::detect_in_blocks;
 use onomato::audio::{resample_clip, ChannelSelect, WavSource};
 use onomato::config::{DetectorSettings, Method, PatternKind};
 use onomato::eval::{load_truth, score, Annotation, Score};
-use onomato::{Detector, Pattern};
+use onomato::{Detector, Event, Pattern};
 
 /// A recording at its own rate, mono.
 struct Audio {
@@ -80,15 +83,45 @@ fn pattern(name: &str, take: &[f32], rate: u32, settings: &DetectorSettings) -> 
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Block sizes every recording is detected with; the first gives the events scored.
+const BLOCK_SIZES: [usize; 3] = [256, 64, 1024];
+/// Detections checked for the same events at every block size.
+static BLOCK_CHECKS: AtomicUsize = AtomicUsize::new(0);
+
+/// The events of `rec`, detected in blocks of 256 samples; also detected in blocks of 64
+/// and 1024, which must give the very same events (the process ends with an error if
+/// not).
+fn detect(patterns: &[Pattern], settings: &DetectorSettings, rec: &Audio) -> Vec<Event> {
+    let runs: Vec<Vec<Event>> = BLOCK_SIZES
+        .iter()
+        .map(|&block| {
+            let mut det = Detector::new(patterns.to_vec(), settings, rec.rate).unwrap();
+            detect_in_blocks(&mut det, &rec.samples, block)
+        })
+        .collect();
+    for (run, block) in runs.iter().zip(BLOCK_SIZES).skip(1) {
+        if *run != runs[0] {
+            eprintln!(
+                "error: blocks of {block} samples gave other events than blocks of {} ({:?} method): {} against {} events",
+                BLOCK_SIZES[0],
+                settings.method,
+                run.len(),
+                runs[0].len()
+            );
+            std::process::exit(1);
+        }
+    }
+    BLOCK_CHECKS.fetch_add(1, Ordering::Relaxed);
+    runs.into_iter().next().unwrap()
+}
+
 fn run(
     patterns: &[Pattern],
     settings: &DetectorSettings,
     rec: &Audio,
     truth: &[Annotation],
 ) -> Score {
-    let mut det = Detector::new(patterns.to_vec(), settings, rec.rate).unwrap();
-    let events = detect_in_blocks(&mut det, &rec.samples, 256);
-    score(&events, truth, 0.05)
+    score(&detect(patterns, settings, rec), truth, 0.05)
 }
 
 fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64) -> Score {
@@ -386,8 +419,7 @@ fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
     let mut all_truth = Vec::new();
     for (i, (rec, truth)) in recs.iter().enumerate() {
         let offset = 1000.0 * i as f64;
-        let mut det = Detector::new(patterns.clone(), settings, rec.rate).unwrap();
-        for mut e in detect_in_blocks(&mut det, &rec.samples, 256) {
+        for mut e in detect(&patterns, settings, rec) {
             e.time += offset;
             e.emitted_at += offset;
             all_events.push(e);
@@ -612,6 +644,11 @@ fn main() {
             );
         }
     }
+    println!();
+    println!(
+        "Block sizes {BLOCK_SIZES:?} gave the same events in each of the {} detections above.",
+        BLOCK_CHECKS.load(Ordering::Relaxed)
+    );
     println!();
     println!("Annotation check: mean share of energy below 300 Hz in the 40 ms after each annotated onset");
     println!();
