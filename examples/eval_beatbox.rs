@@ -124,7 +124,29 @@ fn run(
     score(&detect(patterns, settings, rec), truth, 0.05)
 }
 
-fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64) -> Score {
+/// Which instances of each sound are enrolled (the first `takes`, as one pattern's
+/// takes) and which are scored (from `scored_from` on; the ones before are left out).
+#[derive(Clone, Copy)]
+struct Enrolment {
+    takes: usize,
+    scored_from: usize,
+}
+
+impl Enrolment {
+    /// The protocol of the sets: the first instance enrolled, every other one scored.
+    const FIRST: Self = Self {
+        takes: 1,
+        scored_from: 1,
+    };
+}
+
+fn isolated(
+    dir: &Path,
+    settings: &DetectorSettings,
+    gaps: (f64, f64),
+    seed: u64,
+    enrolment: Enrolment,
+) -> Score {
     let classes = ["b", "c", "ts"];
     let mut patterns = Vec::new();
     let mut others: Vec<(&str, Audio)> = Vec::new();
@@ -134,9 +156,18 @@ fn isolated(dir: &Path, settings: &DetectorSettings, gaps: (f64, f64), seed: u64
             .map(|e| e.unwrap().path())
             .collect();
         files.sort();
-        let first = read(&files[0]);
-        patterns.push(pattern(class, &first.samples, first.rate, settings));
-        for f in &files[1..] {
+        let takes: Vec<Vec<f32>> = files[..enrolment.takes]
+            .iter()
+            .map(|f| {
+                let take = read(f);
+                resample_clip(&take.samples, take.rate, settings.sample_rate).unwrap()
+            })
+            .collect();
+        patterns.push(
+            Pattern::from_samples(class, PatternKind::Impulse, takes, settings)
+                .unwrap_or_else(|e| panic!("{e}")),
+        );
+        for f in &files[enrolment.scored_from..] {
             others.push((class, read(f)));
         }
     }
@@ -388,7 +419,10 @@ fn repeated_onsets(rec: &Audio) -> Vec<f64> {
 
 /// repeated/: the first instance of every file is enrolled (one pattern per sound);
 /// each file must give its own label at every repetition. Files are scored together.
-fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
+/// With `Enrolment::FIRST` the first instance, found in the stream, is scored too.
+fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool, enrolment: Enrolment) -> Score {
+    let Enrolment { takes, scored_from } = enrolment;
+    let scored_from = if scored_from > 1 { scored_from } else { 0 };
     let sounds = ["bass", "cymbal", "hi-hat", "snare", "tom"];
     let mut recs = Vec::new();
     let mut patterns = Vec::new();
@@ -403,12 +437,20 @@ fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
                 end: None,
             })
             .collect();
-        if let Some(take) = cut_first(&rec, &truth, &label) {
-            patterns.push(pattern(&label, &take, rec.rate, settings));
+        let cuts: Vec<Vec<f32>> = (0..takes.min(truth.len()))
+            .map(|i| {
+                resample_clip(&cut_at(&rec, &truth, i), rec.rate, settings.sample_rate).unwrap()
+            })
+            .collect();
+        if !cuts.is_empty() {
+            patterns.push(
+                Pattern::from_samples(&label, PatternKind::Impulse, cuts, settings)
+                    .unwrap_or_else(|e| panic!("{e}")),
+            );
         }
         recs.push((rec, truth));
     }
-    if verbose {
+    if verbose && takes == 1 && scored_from == 0 {
         print_look_alikes("repeated takes", &patterns, settings);
         let all: Vec<(&Audio, &[Annotation])> =
             recs.iter().map(|(r, t)| (r, t.as_slice())).collect();
@@ -419,12 +461,19 @@ fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Score {
     let mut all_truth = Vec::new();
     for (i, (rec, truth)) in recs.iter().enumerate() {
         let offset = 1000.0 * i as f64;
+        let scored_after = match scored_from {
+            0 => f64::NEG_INFINITY,
+            n => truth.get(n).map_or(f64::INFINITY, |t| t.onset - 0.05),
+        };
         for mut e in detect(&patterns, settings, rec) {
+            if e.time < scored_after {
+                continue;
+            }
             e.time += offset;
             e.emitted_at += offset;
             all_events.push(e);
         }
-        all_truth.extend(truth.iter().map(|t| Annotation {
+        all_truth.extend(truth.iter().skip(scored_from).map(|t| Annotation {
             onset: t.onset + offset,
             ..t.clone()
         }));
@@ -622,15 +671,27 @@ fn main() {
                 eprintln!("{set} {method:?}\n{}", onomato::eval::render_text(s));
             }
         };
+        // More takes: the first three enrolled against the first alone, on the same
+        // later sounds.
+        let later = |takes| Enrolment {
+            takes,
+            scored_from: 3,
+        };
         if wanted("isolated") {
             show(
                 "isolated, gaps 30-700 ms",
-                &isolated(&dir, &settings, (0.03, 0.7), 1),
+                &isolated(&dir, &settings, (0.03, 0.7), 1, Enrolment::FIRST),
             );
             show(
                 "isolated, gaps 30-120 ms",
-                &isolated(&dir, &settings, (0.03, 0.12), 2),
+                &isolated(&dir, &settings, (0.03, 0.12), 2, Enrolment::FIRST),
             );
+            for takes in [1, 3] {
+                show(
+                    &format!("isolated from take 04, gaps 30-120 ms, {takes} take(s) enrolled"),
+                    &isolated(&dir, &settings, (0.03, 0.12), 2, later(takes)),
+                );
+            }
         }
         if wanted("beats") {
             for (name, s) in beats(&dir, &settings, verbose) {
@@ -640,8 +701,14 @@ fn main() {
         if wanted("repeated") {
             show(
                 "repeated (5 sounds, 56 repetitions)",
-                &repeated(&dir, &settings, verbose),
+                &repeated(&dir, &settings, verbose, Enrolment::FIRST),
             );
+            for takes in [1, 3] {
+                show(
+                    &format!("repeated from the 4th (41 repetitions), {takes} take(s) enrolled"),
+                    &repeated(&dir, &settings, verbose, later(takes)),
+                );
+            }
         }
     }
     println!();
