@@ -15,7 +15,8 @@
 //!   loudest.
 //! - beats: one instance of each label is enrolled from rec2 (cut around its annotated
 //!   onset) and detected on rec3 (also resampled to 48 kHz) and rec4; rec6's labels
-//!   that rec2 lacks are enrolled from rec6's first instance, and rec6 is detected whole.
+//!   that rec2 lacks are enrolled from rec6's first instance (its lip buzz "BB" as a
+//!   continuous pattern), and rec6 is detected whole.
 //!   A take whose derived labels are off by whole steps of the beat (`label_phase`, a
 //!   check on the audio alone) is scored both as given and with its labels moved.
 //! - repeated: each file repeats one sound; the first instance of every file is
@@ -78,9 +79,18 @@ fn energy_onset(x: &[f32], rate: u32) -> usize {
 
 /// A pattern from a take at `rate` (resampled to the working rate for enrolment).
 fn pattern(name: &str, take: &[f32], rate: u32, settings: &DetectorSettings) -> Pattern {
+    pattern_of_kind(name, PatternKind::Impulse, take, rate, settings)
+}
+
+fn pattern_of_kind(
+    name: &str,
+    kind: PatternKind,
+    take: &[f32],
+    rate: u32,
+    settings: &DetectorSettings,
+) -> Pattern {
     let take = resample_clip(take, rate, settings.sample_rate).unwrap();
-    Pattern::from_samples(name, PatternKind::Impulse, vec![take], settings)
-        .unwrap_or_else(|e| panic!("{e}"))
+    Pattern::from_samples(name, kind, vec![take], settings).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Block sizes every recording is detected with; the first gives the events scored.
@@ -377,8 +387,14 @@ fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String,
     let (rec6, truth6) = load("rsalazar_rec6");
     let mut enrol6 = enrol2.clone();
     for l in labels(&truth6).iter().filter(|l| !labels2.contains(l)) {
+        // "BB" is a lip buzz, a held sound: a continuous pattern.
+        let kind = if l == "BB" {
+            PatternKind::Continuous
+        } else {
+            PatternKind::Impulse
+        };
         if let Some(take) = cut_first(&rec6, &truth6, l) {
-            enrol6.push(pattern(l, &take, rec6.rate, settings));
+            enrol6.push(pattern_of_kind(l, kind, &take, rec6.rate, settings));
         }
     }
     if verbose {

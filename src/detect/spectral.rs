@@ -291,8 +291,8 @@ const FEATURES: usize = BANDS;
 /// tilt of a spectrum (more bass or more hiss) dominates; a higher power weighs the
 /// finer shape (where the resonances of the mouth lie), which tells look-alike hits
 /// apart. On the real recordings of `examples/eval_beatbox.rs` (threshold 0.3, with
-/// tracking), F1 of rec6 / the repeated set: 0.36 / 0.84 at 0, 0.46 / 0.88 at 0.3,
-/// 0.68 / 0.90 at 0.5, 0.64 / 0.88 at 0.7 (rec3 falls from 0.94 to 0.88), 0.64 / 0.62
+/// tracking), F1 of rec6 / the repeated set: 0.43 / 0.84 at 0, 0.50 / 0.88 at 0.3,
+/// 0.71 / 0.93 at 0.5, 0.64 / 0.91 at 0.7 (rec3 falls from 0.94 to 0.88), 0.64 / 0.62
 /// at 1. Scores are lower than plain correlations: hence the method's threshold.
 const LIFTER_POWER: f32 = 0.5;
 
@@ -1013,7 +1013,7 @@ impl SpectralMatcher {
     /// however many takes it has, so no pattern gains weight by being heard more. On
     /// the real recordings of `examples/eval_beatbox.rs` (threshold 0.3) it raised the
     /// F1 of the repeated set from 0.80 to 0.93, of rec3 (enrolled from rec2, another
-    /// session) from 0.89 to 0.94 and of rec6 from 0.54 to 0.68, and cost the isolated
+    /// session) from 0.89 to 0.94 and of rec6 from 0.54 to 0.71, and cost the isolated
     /// set at 30-120 ms gaps one label (1.000 to 0.986). A new template from every
     /// confident instance instead (up to 8 per pattern) cost that set 0.07-0.09
     /// (measured with plain correlations, before `LIFTER_POWER`).
