@@ -327,6 +327,32 @@ fn more_enrolment_takes_do_not_make_it_worse() {
     );
 }
 
+#[test]
+fn a_pattern_enrolled_two_different_ways_is_found_both_ways() {
+    // "hit" is a kick or a hi-hat, whichever the user makes; "k" is a snare. The takes
+    // of a pattern are drawn towards their mean, but not so far that either way is lost.
+    let settings = spectral();
+    let patterns = vec![
+        Pattern::from_samples(
+            "hit",
+            PatternKind::Impulse,
+            vec![kick(1), hat(1)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("k", PatternKind::Impulse, vec![snare(1)], &settings).unwrap(),
+    ];
+    let (rec, mut truth, _) = sequence((0.03, 0.4), 12);
+    for t in &mut truth {
+        if t.label != "k" {
+            t.label = "hit".into();
+        }
+    }
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let s = score(&detect_in_blocks(&mut det, &rec, 256), &truth, 0.05);
+    assert!(s.overall.f1 >= 0.95, "{}", onomato::eval::render_text(&s));
+}
+
 /// How many of `times` have a kick ("b") event within 50 ms.
 fn kicks_found(events: &[Event], times: &[f64]) -> usize {
     times
