@@ -10,9 +10,9 @@
 //! one sound); at least 40 ms since the previous onset. A sound 25 dB louder than the
 //! opening of the last onset, once that opening has faded, is new regardless (the
 //! faint click of the lips before a hit does not hide the hit), and the click's onset,
-//! if still undecided, gives way. A few frames later the onset is
-//! placed on the samples (first 1.5 ms block within 12 dB of the loudest), and must
-//! stand 10 dB out of the 40-10 ms before it (a consonant inside speech follows a vowel).
+//! if still undecided, gives way. A few frames later the onset is placed on the
+//! samples (first 1.5 ms block within 12 dB of the loudest), and must stand 10 dB out
+//! of the 40-10 ms before it (a consonant inside speech follows a vowel).
 //! An enrolled take's onset is placed the same way, or where the onset detector would
 //! find it in a stream when that is earlier by more than a decision window (`take_onset`).
 //! A held sound that swells (a breathy "h" before its vowel) is placed where the stream
@@ -26,8 +26,8 @@
 //! (`LIFTER_POWER`; the mean level is dropped, so the level does not matter), and
 //! compared by cosine with the same of every enrolment take (an impulse pattern's
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), allowing a
-//! shift of ±1 frame. Each impulse pattern also has a tracked template that follows the voice
-//! as it drifts from the takes (`SpectralMatcher::track`). The best pattern wins if its
+//! shift of ±1 frame. Each impulse pattern also has a tracked template that follows
+//! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern wins if its
 //! score passes its threshold; below, the sound is none of the patterns and nothing
 //! fires. Each onset is decided once, so a sound never gives two events. A sound whose
 //! strength (its amplitude against the take's over the decision window) is below
