@@ -606,7 +606,7 @@ fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
 
 #[test]
 fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
-    // The lips or the tongue often click faintly (here 40 dB under the hit) tens of
+    // The lips or the tongue often click faintly (here some 35-40 dB under the hit) tens of
     // milliseconds before a hit: the click is an onset of its own, too faint to fire,
     // and the hit after it must still be found, on its own onset.
     let settings = spectral();
