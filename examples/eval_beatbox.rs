@@ -77,20 +77,14 @@ fn energy_onset(x: &[f32], rate: u32) -> usize {
     onset * block
 }
 
-/// A pattern from a take at `rate` (resampled to the working rate for enrolment).
-fn pattern(name: &str, take: &[f32], rate: u32, settings: &DetectorSettings) -> Pattern {
-    pattern_of_kind(name, PatternKind::Impulse, take, rate, settings)
-}
-
-fn pattern_of_kind(
-    name: &str,
-    kind: PatternKind,
-    take: &[f32],
-    rate: u32,
-    settings: &DetectorSettings,
-) -> Pattern {
-    let take = resample_clip(take, rate, settings.sample_rate).unwrap();
-    Pattern::from_samples(name, kind, vec![take], settings).unwrap_or_else(|e| panic!("{e}"))
+/// A pattern from takes each at its own rate (resampled to the working rate for
+/// enrolment).
+fn pattern(name: &str, kind: PatternKind, takes: &[Audio], settings: &DetectorSettings) -> Pattern {
+    let takes = takes
+        .iter()
+        .map(|t| resample_clip(&t.samples, t.rate, settings.sample_rate).unwrap())
+        .collect();
+    Pattern::from_samples(name, kind, takes, settings).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Block sizes every recording is detected with; the first gives the events scored.
@@ -136,17 +130,24 @@ fn run(
 
 /// Which instances of each sound are enrolled (the first `takes`, as one pattern's
 /// takes) and which are scored (from `scored_from` on; the ones before are left out).
-#[derive(Clone, Copy)]
+/// In isolated/ an enrolled take is not laid out at all; in repeated/ it is part of the
+/// recording, and the set's own protocol scores it too (`scored_from` 0).
+#[derive(Clone, Copy, PartialEq)]
 struct Enrolment {
     takes: usize,
     scored_from: usize,
 }
 
 impl Enrolment {
-    /// The protocol of the sets: the first instance enrolled, every other one scored.
-    const FIRST: Self = Self {
+    /// The protocol of isolated/: take 01 enrolled, every other take scored.
+    const FIRST_TAKE: Self = Self {
         takes: 1,
         scored_from: 1,
+    };
+    /// The protocol of repeated/: the first instance enrolled, every one scored.
+    const FIRST_INSTANCE: Self = Self {
+        takes: 1,
+        scored_from: 0,
     };
 }
 
@@ -166,17 +167,8 @@ fn isolated(
             .map(|e| e.unwrap().path())
             .collect();
         files.sort();
-        let takes: Vec<Vec<f32>> = files[..enrolment.takes]
-            .iter()
-            .map(|f| {
-                let take = read(f);
-                resample_clip(&take.samples, take.rate, settings.sample_rate).unwrap()
-            })
-            .collect();
-        patterns.push(
-            Pattern::from_samples(class, PatternKind::Impulse, takes, settings)
-                .unwrap_or_else(|e| panic!("{e}")),
-        );
+        let takes: Vec<Audio> = files[..enrolment.takes].iter().map(|f| read(f)).collect();
+        patterns.push(pattern(class, PatternKind::Impulse, &takes, settings));
         for f in &files[enrolment.scored_from..] {
             others.push((class, read(f)));
         }
@@ -220,21 +212,24 @@ fn label_name(label: &str) -> String {
 }
 
 /// The first instance of `label` in `rec`, cut by [`cut_at`].
-fn cut_first(rec: &Audio, truth: &[Annotation], label: &str) -> Option<Vec<f32>> {
+fn cut_first(rec: &Audio, truth: &[Annotation], label: &str) -> Option<Audio> {
     let i = truth.iter().position(|t| t.label == label)?;
     Some(cut_at(rec, truth, i))
 }
 
 /// Instance `i` of `truth` in `rec`, cut from 20 ms before its onset to the next onset
 /// (at most 300 ms).
-fn cut_at(rec: &Audio, truth: &[Annotation], i: usize) -> Vec<f32> {
+fn cut_at(rec: &Audio, truth: &[Annotation], i: usize) -> Audio {
     let rate = f64::from(rec.rate);
     let start = ((truth[i].onset - 0.02).max(0.0) * rate) as usize;
     let next = truth
         .get(i + 1)
         .map_or(truth[i].onset + 0.3, |t| t.onset - 0.01);
     let end = ((next.min(truth[i].onset + 0.3)) * rate) as usize;
-    rec.samples[start..end.min(rec.samples.len())].to_vec()
+    Audio {
+        samples: rec.samples[start..end.min(rec.samples.len())].to_vec(),
+        rate: rec.rate,
+    }
 }
 
 /// A beat take from `beats/` and its annotation, labels reduced to letters and digits.
@@ -283,7 +278,8 @@ fn print_label_similarity(
     for (rec, rec_truth) in recs {
         for i in 0..rec_truth.len() {
             let name = instances.len().to_string();
-            let take = resample_clip(&cut_at(rec, rec_truth, i), rec.rate, settings.sample_rate);
+            let take = cut_at(rec, rec_truth, i);
+            let take = resample_clip(&take.samples, take.rate, settings.sample_rate);
             instances.push(take.ok().and_then(|take| {
                 Pattern::from_samples(&name, PatternKind::Impulse, vec![take], settings).ok()
             }));
@@ -347,8 +343,8 @@ fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String,
         .filter_map(|l| {
             Some(pattern(
                 l,
-                &cut_first(&rec2, &truth2, l)?,
-                rec2.rate,
+                PatternKind::Impulse,
+                &[cut_first(&rec2, &truth2, l)?],
                 settings,
             ))
         })
@@ -394,7 +390,7 @@ fn beats(dir: &Path, settings: &DetectorSettings, verbose: bool) -> Vec<(String,
             PatternKind::Impulse
         };
         if let Some(take) = cut_first(&rec6, &truth6, l) {
-            enrol6.push(pattern_of_kind(l, kind, &take, rec6.rate, settings));
+            enrol6.push(pattern(l, kind, &[take], settings));
         }
     }
     if verbose {
@@ -435,10 +431,8 @@ fn repeated_onsets(rec: &Audio) -> Vec<f64> {
 
 /// repeated/: the first instance of every file is enrolled (one pattern per sound);
 /// each file must give its own label at every repetition. Files are scored together.
-/// With `Enrolment::FIRST` the first instance, found in the stream, is scored too.
 fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool, enrolment: Enrolment) -> Score {
     let Enrolment { takes, scored_from } = enrolment;
-    let scored_from = if scored_from > 1 { scored_from } else { 0 };
     let sounds = ["bass", "cymbal", "hi-hat", "snare", "tom"];
     let mut recs = Vec::new();
     let mut patterns = Vec::new();
@@ -453,20 +447,15 @@ fn repeated(dir: &Path, settings: &DetectorSettings, verbose: bool, enrolment: E
                 end: None,
             })
             .collect();
-        let cuts: Vec<Vec<f32>> = (0..takes.min(truth.len()))
-            .map(|i| {
-                resample_clip(&cut_at(&rec, &truth, i), rec.rate, settings.sample_rate).unwrap()
-            })
+        let cuts: Vec<Audio> = (0..takes.min(truth.len()))
+            .map(|i| cut_at(&rec, &truth, i))
             .collect();
         if !cuts.is_empty() {
-            patterns.push(
-                Pattern::from_samples(&label, PatternKind::Impulse, cuts, settings)
-                    .unwrap_or_else(|e| panic!("{e}")),
-            );
+            patterns.push(pattern(&label, PatternKind::Impulse, &cuts, settings));
         }
         recs.push((rec, truth));
     }
-    if verbose && takes == 1 && scored_from == 0 {
+    if verbose && enrolment == Enrolment::FIRST_INSTANCE {
         print_look_alikes("repeated takes", &patterns, settings);
         let all: Vec<(&Audio, &[Annotation])> =
             recs.iter().map(|(r, t)| (r, t.as_slice())).collect();
@@ -696,11 +685,11 @@ fn main() {
         if wanted("isolated") {
             show(
                 "isolated, gaps 30-700 ms",
-                &isolated(&dir, &settings, (0.03, 0.7), 1, Enrolment::FIRST),
+                &isolated(&dir, &settings, (0.03, 0.7), 1, Enrolment::FIRST_TAKE),
             );
             show(
                 "isolated, gaps 30-120 ms",
-                &isolated(&dir, &settings, (0.03, 0.12), 2, Enrolment::FIRST),
+                &isolated(&dir, &settings, (0.03, 0.12), 2, Enrolment::FIRST_TAKE),
             );
             for takes in [1, 3] {
                 show(
@@ -717,7 +706,7 @@ fn main() {
         if wanted("repeated") {
             show(
                 "repeated (5 sounds, 56 repetitions)",
-                &repeated(&dir, &settings, verbose, Enrolment::FIRST),
+                &repeated(&dir, &settings, verbose, Enrolment::FIRST_INSTANCE),
             );
             for takes in [1, 3] {
                 show(

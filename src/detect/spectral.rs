@@ -27,11 +27,11 @@
 //! compared by cosine with the same of every enrolment take (an impulse pattern's
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), allowing a
 //! shift of ±1 frame. Each impulse pattern also has a tracked template that follows
-//! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern wins if its
-//! score passes its threshold; below, the sound is none of the patterns and nothing
-//! fires. Each onset is decided once, so a sound never gives two events. A sound whose
-//! strength (its amplitude against the take's over the decision window) is below
-//! `min_strength` is not the user's (a voice across the room, a breath) and does not
+//! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern
+//! wins if its score passes its threshold; below, the sound is none of the patterns and
+//! nothing fires. Each onset is decided once, so a sound never gives two events. A
+//! sound whose strength (its amplitude against the take's over the decision window) is
+//! below `min_strength` is not the user's (a voice across the room, a breath) and does not
 //! fire either. Nor does an onset inside the last impulse's take that the take itself
 //! has at that time, at that level (the closing "p" of a "pop"): see
 //! `SpectralMatcher::continues_last_impulse`.
