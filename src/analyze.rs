@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::Config;
 use crate::detect::waveform::TakeTrace;
-use crate::detect::{DetectError, Detector, Event};
+use crate::detect::{DetectError, Detector, Event, OnsetRecord};
 use crate::pattern::{self, PatternError};
 use crate::solver::{self, Contact};
 
@@ -44,19 +44,30 @@ pub struct Analysis {
     pub thresholds: Vec<(std::sync::Arc<str>, f64)>,
     /// The detector's working rate (of the score traces).
     pub working_rate: u32,
+    /// Spectral method, when asked for: every onset considered and what became of it.
+    pub onsets: Option<Vec<OnsetRecord>>,
+}
+
+/// What an analysis keeps besides the events.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Keep {
+    /// Match scores over time, for a plot (waveform method).
+    pub scores: bool,
+    /// Every onset considered (spectral method).
+    pub onsets: bool,
 }
 
 /// Detects `config`'s patterns in the WAV file `recording`.
 pub fn analyze_file(recording: &Path, config: &Config) -> Result<Analysis, AnalyzeError> {
-    analyze_file_with(recording, config, false, &mut |_| {})
+    analyze_file_with(recording, config, Keep::default(), &mut |_| {})
 }
 
-/// [`analyze_file`], keeping the match scores for a plot when `keep_scores` is set;
-/// `progress` is called with the fraction of the file read so far.
+/// [`analyze_file`], keeping what `keep` asks for; `progress` is called with the
+/// fraction of the file read so far.
 pub fn analyze_file_with(
     recording: &Path,
     config: &Config,
-    keep_scores: bool,
+    keep: Keep,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Analysis, AnalyzeError> {
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
@@ -70,8 +81,11 @@ pub fn analyze_file_with(
         .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let mut source = WavSource::open(recording, select).map_err(AnalyzeError::Recording)?;
     let mut detector = Detector::new(patterns, &config.detector, source.sample_rate())?;
-    if keep_scores {
+    if keep.scores {
         detector.enable_score_trace();
+    }
+    if keep.onsets {
+        detector.enable_explain();
     }
     let total = source.frames_total().max(1);
     let mut events = Vec::new();
@@ -103,6 +117,7 @@ pub fn analyze_file_with(
         duration: frames as f64 / f64::from(source.sample_rate()),
         sample_rate: source.sample_rate(),
         score_traces: detector.take_score_trace(),
+        onsets: detector.take_explain(),
         thresholds,
         working_rate: config.detector.sample_rate,
     })
@@ -124,6 +139,8 @@ struct JsonOutput<'a> {
     events: &'a [Event],
     #[serde(skip_serializing_if = "Option::is_none")]
     bounce: Option<&'a [Contact]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    onsets: Option<&'a [OnsetRecord]>,
 }
 
 /// Writes `{"events":[...]}` (and `"bounce":[...]` when given) and a newline.
@@ -132,8 +149,51 @@ pub fn write_json(
     events: &[Event],
     bounce: Option<&[Contact]>,
 ) -> std::io::Result<()> {
-    serde_json::to_writer(&mut *out, &JsonOutput { events, bounce })?;
+    write_json_with(out, events, bounce, None)
+}
+
+/// [`write_json`], with `"onsets":[...]` when given (`--explain`).
+pub fn write_json_with(
+    out: &mut dyn Write,
+    events: &[Event],
+    bounce: Option<&[Contact]>,
+    onsets: Option<&[OnsetRecord]>,
+) -> std::io::Result<()> {
+    serde_json::to_writer(
+        &mut *out,
+        &JsonOutput {
+            events,
+            bounce,
+            onsets,
+        },
+    )?;
     writeln!(out)
+}
+
+/// Writes one line per onset considered: its time, the two patterns it resembled most
+/// with their scores, its strength, and what became of it (`--explain`, on stderr).
+pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  outcome",
+        "onset s", "best", "score", "second", "score", "strength"
+    )?;
+    for r in onsets {
+        let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
+        let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
+        writeln!(
+            out,
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {}",
+            r.time,
+            name(&r.best),
+            num(r.best_score),
+            name(&r.second),
+            num(r.second_score),
+            num(r.strength),
+            r.outcome.as_str()
+        )?;
+    }
+    Ok(())
 }
 
 /// Header of the CSV output.

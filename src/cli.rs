@@ -213,6 +213,13 @@ pub struct AnalyzeArgs {
     /// Also draw the waveform, each pattern's match score and the events as an SVG.
     #[arg(long, value_name = "OUT.svg")]
     pub plot: Option<PathBuf>,
+    /// Spectral method: list every onset the detector considered, with the two patterns
+    /// it resembled most, their scores, and what became of it and which stage decided
+    /// (fired, quiet_before, speech_guard, continuation, below_threshold,
+    /// held_continues, min_strength, superseded): a table on stderr, and an "onsets"
+    /// array in the JSON output.
+    #[arg(long)]
+    pub explain: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -294,13 +301,16 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         bar.set_style(style);
     }
     let started = std::time::Instant::now();
-    let analysis =
-        analyze::analyze_file_with(&args.recording, &config, args.plot.is_some(), &mut |done| {
-            // Short analyses finish before a bar would help.
-            if started.elapsed() > std::time::Duration::from_millis(300) {
-                bar.set_position((done * 1000.0) as u64);
-            }
-        });
+    let keep = analyze::Keep {
+        scores: args.plot.is_some(),
+        onsets: args.explain || args.plot.is_some(),
+    };
+    let analysis = analyze::analyze_file_with(&args.recording, &config, keep, &mut |done| {
+        // Short analyses finish before a bar would help.
+        if started.elapsed() > std::time::Duration::from_millis(300) {
+            bar.set_position((done * 1000.0) as u64);
+        }
+    });
     bar.finish_and_clear();
     let analysis = analysis?;
     if let Some(path) = &args.plot {
@@ -313,6 +323,15 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
             .map_err(analyze::AnalyzeError::Recording)?;
         crate::plot::write_svg(path, &samples, &analysis)?;
     }
+    if args.explain {
+        match &analysis.onsets {
+            Some(onsets) => analyze::write_explain(&mut std::io::stderr().lock(), onsets)
+                .context("cannot write to stderr")?,
+            None => tracing::warn!(
+                "--explain lists the onsets of the spectral method; the waveform method has none"
+            ),
+        }
+    }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     match args.format {
@@ -320,7 +339,8 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
             let contacts = args
                 .bounce
                 .then(|| analyze::bounce(&analysis.events, &config));
-            analyze::write_json(&mut out, &analysis.events, contacts.as_deref())
+            let onsets = analysis.onsets.as_deref().filter(|_| args.explain);
+            analyze::write_json_with(&mut out, &analysis.events, contacts.as_deref(), onsets)
         }
         Format::Csv => analyze::write_csv(&mut out, &analysis.events),
     }

@@ -666,3 +666,52 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     ]);
     assert!(!stderr(&out).contains("warning:"), "{}", stderr(&out));
 }
+
+#[test]
+fn explain_lists_every_onset_with_what_became_of_it() {
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "--config",
+        "config/onomato.toml",
+        "--explain",
+    ]);
+    assert!(out.status.success(), "stderr: {}", stderr(&out));
+    let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let events = doc["events"].as_array().unwrap();
+    let onsets = doc["onsets"].as_array().expect("an onsets array");
+    assert!(onsets.len() >= events.len());
+    // Every impulse (and every held sound's begin) is a fired onset at its time, with
+    // its pattern as the best and its score.
+    for e in events {
+        let fired = onsets.iter().find(|o| {
+            o["outcome"] == "fired"
+                && (o["time"].as_f64().unwrap() - e["time"].as_f64().unwrap()).abs() < 1e-4
+        });
+        let o = fired.unwrap_or_else(|| panic!("no fired onset for {e}"));
+        assert_eq!(o["best"], e["pattern"]);
+        assert_eq!(o["best_score"], e["score"]);
+    }
+    let fired = onsets.iter().filter(|o| o["outcome"] == "fired").count();
+    assert_eq!(fired, events.len());
+    // Every other onset names the gate that stopped it.
+    let named = [
+        "quiet_before",
+        "speech_guard",
+        "continuation",
+        "below_threshold",
+        "held_continues",
+        "min_strength",
+        "superseded",
+    ];
+    for o in onsets.iter().filter(|o| o["outcome"] != "fired") {
+        assert!(named.contains(&o["outcome"].as_str().unwrap()), "{o}");
+    }
+    // The same, as a table on stderr.
+    let table = stderr(&out);
+    assert!(table.contains("outcome"), "{table}");
+    assert_eq!(
+        table.lines().filter(|l| l.ends_with(" fired")).count(),
+        events.len()
+    );
+}

@@ -19,7 +19,7 @@ use serde::{Serialize, Serializer};
 use crate::audio::{AudioError, StreamResampler};
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
-pub use spectral::SpectralMatcher;
+pub use spectral::{OnsetRecord, Outcome, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
 /// The matcher a detector runs.
@@ -130,7 +130,14 @@ pub struct Detector {
     /// Per pattern name: the id of its continuous event that has begun and not ended.
     /// Made with one slot per pattern, so updating it does not allocate.
     open_ids: Vec<(Arc<str>, Option<u64>)>,
+    /// Input samples after sanitising (see [`Detector::process`]), a block at a time.
+    clean: Vec<f32>,
+    /// Samples that were not finite or beyond full scale.
+    bad_samples: u64,
 }
+
+/// Samples are taken in pieces of this many to be sanitised.
+const CLEAN_BLOCK: usize = 1024;
 
 impl Detector {
     /// Builds a detector for `patterns` (already at `settings.sample_rate`) that takes
@@ -169,6 +176,8 @@ impl Detector {
             report_begins: false,
             time_offset: 0.0,
             open_ids,
+            clean: vec![0.0; CLEAN_BLOCK],
+            bad_samples: 0,
         })
     }
 
@@ -234,6 +243,28 @@ impl Detector {
         }
     }
 
+    /// Spectral method: keeps a record of every onset the detector considers and what
+    /// became of it, from now on (grows with the stream: for offline use only).
+    pub fn enable_explain(&mut self) {
+        if let Matcher::Spectral(m) = &mut self.matcher {
+            m.enable_explain();
+        }
+    }
+
+    /// Hands over the onset records (see [`Detector::enable_explain`]), their times on
+    /// the stream's clock.
+    pub fn take_explain(&mut self) -> Option<Vec<spectral::OnsetRecord>> {
+        let Matcher::Spectral(m) = &mut self.matcher else {
+            return None;
+        };
+        let mut records = m.take_explain()?;
+        for r in &mut records {
+            r.time += self.time_offset;
+            r.decided_at += self.time_offset;
+        }
+        Some(records)
+    }
+
     /// Hands over the recorded match scores (see [`Detector::score_trace`]).
     pub fn take_score_trace(&mut self) -> Option<Vec<waveform::TakeTrace>> {
         match &mut self.matcher {
@@ -250,19 +281,45 @@ impl Detector {
         }
     }
 
+    /// Samples replaced so far because they were not finite (NaN, infinite: counted
+    /// as 0) or beyond full scale (clamped to ±1).
+    pub fn bad_samples(&self) -> u64 {
+        self.bad_samples
+    }
+
     /// Consumes one block of mono input and appends the events decided meanwhile.
+    /// Samples that are not finite become 0 and samples beyond full scale are clamped
+    /// to ±1 before anything else sees them: no state of the detector (resampler,
+    /// noise floors, onset function) can be captured by a corrupt burst.
     pub fn process(&mut self, block: &[f32], out: &mut Vec<Event>) {
         let first = out.len();
         self.input_consumed += block.len() as u64;
         let input_rate = f64::from(self.input_rate);
         let Self {
-            resampler, matcher, ..
+            resampler,
+            matcher,
+            clean,
+            bad_samples,
+            ..
         } = self;
-        match resampler {
-            None => matcher.push(block, out),
-            Some(r) => r.push(block, &mut |piece, consumed| {
-                push_resampled(matcher, out, piece, consumed as f64 / input_rate)
-            }),
+        for piece in block.chunks(CLEAN_BLOCK) {
+            let clean = &mut clean[..piece.len()];
+            for (c, &x) in clean.iter_mut().zip(piece) {
+                *c = if x.is_finite() {
+                    x.clamp(-1.0, 1.0)
+                } else {
+                    0.0
+                };
+                if *c != x {
+                    *bad_samples += 1;
+                }
+            }
+            match resampler {
+                None => matcher.push(clean, out),
+                Some(r) => r.push(clean, &mut |piece, consumed| {
+                    push_resampled(matcher, out, piece, consumed as f64 / input_rate)
+                }),
+            }
         }
         self.number(out, first);
     }

@@ -54,6 +54,7 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 use realfft::{RealFftPlanner, RealToComplex};
+use serde::Serialize;
 
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
@@ -457,6 +458,91 @@ pub struct SpectralMatcher {
     pattern_scores: Vec<PatternScore>,
     /// The instance's features at the shift that scored best.
     best_instance: Vec<f32>,
+    /// Every onset decided and what became of it, when asked for (offline).
+    explain: Option<Vec<OnsetRecord>>,
+}
+
+/// What became of an onset, and which stage decided it (`analyze --explain`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    Fired,
+    /// The 10-40 ms before the onset were within 10 dB of its peak: it continues a
+    /// sound (a consonant after a vowel).
+    QuietBefore,
+    /// The speech guard: it follows unrecognised sound.
+    SpeechGuard,
+    /// The last impulse's own later sound (the closing "p" of a "pop").
+    Continuation,
+    /// No pattern scored its threshold: none of the patterns.
+    BelowThreshold,
+    /// A held sound of the same pattern goes on.
+    HeldContinues,
+    /// Quieter than `min_strength` times the take.
+    MinStrength,
+    /// A sound far louder came right after this faint onset, which gave way to it.
+    Superseded,
+}
+
+impl Outcome {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Fired => "fired",
+            Outcome::QuietBefore => "quiet_before",
+            Outcome::SpeechGuard => "speech_guard",
+            Outcome::Continuation => "continuation",
+            Outcome::BelowThreshold => "below_threshold",
+            Outcome::HeldContinues => "held_continues",
+            Outcome::MinStrength => "min_strength",
+            Outcome::Superseded => "superseded",
+        }
+    }
+}
+
+/// What became of one onset (`analyze --explain`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OnsetRecord {
+    /// Onset, seconds of stream.
+    #[serde(serialize_with = "super::seconds")]
+    pub time: f64,
+    /// When it was decided.
+    #[serde(serialize_with = "super::seconds")]
+    pub decided_at: f64,
+    /// The pattern it resembled most, and how much.
+    pub best: Option<Arc<str>>,
+    #[serde(serialize_with = "opt_ratio")]
+    pub best_score: Option<f64>,
+    /// The runner-up.
+    pub second: Option<Arc<str>>,
+    #[serde(serialize_with = "opt_ratio")]
+    pub second_score: Option<f64>,
+    /// Amplitude against the best pattern's take over the decision window.
+    #[serde(serialize_with = "opt_ratio")]
+    pub strength: Option<f64>,
+    pub outcome: Outcome,
+}
+
+impl OnsetRecord {
+    /// An onset decided before it was classified.
+    fn undecided(time: f64, decided_at: f64, outcome: Outcome) -> Self {
+        Self {
+            time,
+            decided_at,
+            best: None,
+            best_score: None,
+            second: None,
+            second_score: None,
+            strength: None,
+            outcome,
+        }
+    }
+}
+
+fn opt_ratio<S: serde::Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match x {
+        Some(v) => super::ratio(v, s),
+        None => s.serialize_none(),
+    }
 }
 
 /// One pattern's score for an onset: the best of its takes and of its tracked
@@ -636,7 +722,18 @@ impl SpectralMatcher {
             tracked_set: vec![false; n_patterns],
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
+            explain: None,
         }
+    }
+
+    /// Keeps a record of every onset from now on (grows with the stream: offline).
+    pub fn enable_explain(&mut self) {
+        self.explain.get_or_insert_with(Vec::new);
+    }
+
+    /// Hands over the records kept since [`Self::enable_explain`].
+    pub fn take_explain(&mut self) -> Option<Vec<OnsetRecord>> {
+        self.explain.as_mut().map(std::mem::take)
     }
 
     /// Pairs of patterns whose takes resemble each other over the decision window at
@@ -740,6 +837,9 @@ impl SpectralMatcher {
         self.finished = true;
         let end_s = end as f64 / self.rate;
         super::keep_within(out, end_s);
+        if let Some(records) = &mut self.explain {
+            records.retain(|r| r.time < end_s);
+        }
     }
 
     fn compute_frame(&mut self, out: &mut Vec<Event>) {
@@ -830,7 +930,16 @@ impl SpectralMatcher {
             // The onset before was this sound's faint approach: if still undecided, it
             // gives way (decided, it stays decided).
             if self.pending.last().map(|p| p.detected) == previous_onset {
-                self.pending.pop();
+                if let (Some(gone), Some(records)) = (self.pending.pop(), &mut self.explain) {
+                    let at = gone
+                        .placed
+                        .map_or(gone.detected * self.analyzer.hop as u64, |p| p.0);
+                    records.push(OnsetRecord::undecided(
+                        at as f64 / self.rate,
+                        self.consumed as f64 / self.rate,
+                        Outcome::Superseded,
+                    ));
+                }
             }
         }
         if self.pending.len() < self.pending.capacity() {
@@ -918,6 +1027,13 @@ impl SpectralMatcher {
             take: best_template,
             ..
         } = self.pattern_scores[pi];
+        let second = self
+            .pattern_scores
+            .iter()
+            .enumerate()
+            .filter(|&(p, s)| p != pi && s.take != usize::MAX)
+            .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
+            .map(|(p, s)| (p, s.score));
         // A vocal hit stands out of relative quiet; a consonant inside speech follows a
         // vowel. Reject onsets whose last tens of milliseconds were nearly as loud.
         // The frames considered are those whose whole window lies in the quiet span.
@@ -931,31 +1047,44 @@ impl SpectralMatcher {
             .frames_inside(quiet_from, quiet_to)
             .map(|f| self.levels[(f % cap) as usize])
             .fold(f32::NEG_INFINITY, f32::max);
-        if peak - pre < PRE_QUIET_DB {
-            return;
+        let early = self.decision_window_energy(time_sample);
+        let strength = (early / self.templates[best_template].early_energy.max(1e-12)).sqrt();
+        let threshold = self.patterns[pi].threshold;
+        // The gates, in order; the first that stops the sound names the outcome.
+        let outcome = if peak - pre < PRE_QUIET_DB {
+            Outcome::QuietBefore
+        } else if self.follows_unrecognised_sound(time_sample, peak) {
+            Outcome::SpeechGuard
+        } else if self.continues_last_impulse(time_sample, onset_frame) {
+            Outcome::Continuation
+        } else if best_score < threshold {
+            Outcome::BelowThreshold
+        } else if self.held.is_some_and(|h| h.pattern == pi) {
+            // A held sound of the same pattern continues: no chatter.
+            Outcome::HeldContinues
+        } else if strength < self.min_strength {
+            Outcome::MinStrength
+        } else {
+            Outcome::Fired
+        };
+        if let Some(records) = &mut self.explain {
+            let name = |i: usize| self.patterns[i].name.clone();
+            records.push(OnsetRecord {
+                time: time_sample as f64 / self.rate,
+                decided_at: self.consumed as f64 / self.rate,
+                best: Some(name(pi)),
+                best_score: Some(f64::from(best_score)),
+                second: second.map(|s| name(s.0)),
+                second_score: second.map(|s| f64::from(s.1)),
+                strength: Some(strength),
+                outcome,
+            });
         }
-        if self.follows_unrecognised_sound(time_sample, peak) {
-            return;
-        }
-        if self.continues_last_impulse(time_sample, onset_frame) {
+        if outcome != Outcome::Fired {
             return;
         }
         let template = &self.templates[best_template];
         let info = &self.patterns[pi];
-        if best_score < info.threshold {
-            return;
-        }
-        // A held sound of the same pattern continues: no chatter.
-        if let Some(h) = &self.held {
-            if h.pattern == pi {
-                return;
-            }
-        }
-        let early = self.decision_window_energy(time_sample);
-        let strength = (early / template.early_energy.max(1e-12)).sqrt();
-        if strength < self.min_strength {
-            return;
-        }
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
         let decided = Event {

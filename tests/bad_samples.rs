@@ -1,0 +1,70 @@
+//! Corrupt input: bursts of NaN or of samples far beyond full scale, as a float device or
+//! a damaged stream can deliver, must not deafen the detector. Regression test named
+//! after the failure: a 10 ms burst of NaN or of ±1e20, 0.2 s into the bundled example,
+//! made the spectral method miss every sound of the next 3 s.
+
+mod common;
+
+use common::root;
+use onomato::analyze::detect_in_blocks;
+use onomato::audio::{ChannelSelect, WavSource};
+use onomato::pattern::load_patterns;
+use onomato::{Config, Detector, Event};
+
+fn example() -> (Config, Vec<f32>, u32) {
+    let config = Config::load(&root().join("config/onomato.toml")).unwrap();
+    let mut source =
+        WavSource::open(&root().join("examples/beat.wav"), ChannelSelect::Mix).unwrap();
+    let rate = source.sample_rate();
+    (config, source.read_all().unwrap(), rate)
+}
+
+fn detect(config: &Config, signal: &[f32], rate: u32) -> (Vec<Event>, u64) {
+    let patterns = load_patterns(&config.patterns, &config.detector).unwrap();
+    let mut det = Detector::new(patterns, &config.detector, rate).unwrap();
+    let events = detect_in_blocks(&mut det, signal, 256);
+    (events, det.bad_samples())
+}
+
+#[test]
+fn a_10_ms_burst_of_nan_or_out_of_range_samples_costs_no_sound_0_3_s_after_it() {
+    let (config, clean, rate) = example();
+    let (reference, bad) = detect(&config, &clean, rate);
+    assert_eq!(bad, 0);
+    assert!(reference.len() >= 10, "{reference:#?}");
+    let burst_len = (0.010 * f64::from(rate)) as usize;
+    for value in [f32::NAN, f32::INFINITY, 1e20, -1e20, 1.0] {
+        for at_s in [0.2, 2.0, 5.0, 7.7] {
+            let mut signal = clean.clone();
+            let at = (at_s * f64::from(rate)) as usize;
+            for (k, x) in signal[at..at + burst_len].iter_mut().enumerate() {
+                *x = if k % 2 == 0 { value } else { -value };
+            }
+            let (events, bad) = detect(&config, &signal, rate);
+            let expected_bad = if value.abs() > 1.0 || !value.is_finite() {
+                burst_len as u64
+            } else {
+                0
+            };
+            assert_eq!(bad, expected_bad, "burst of {value} at {at_s} s");
+            // Every event decided before the burst is unchanged...
+            let before: Vec<&Event> = reference.iter().filter(|e| e.emitted_at < at_s).collect();
+            let now: Vec<&Event> = events.iter().filter(|e| e.emitted_at < at_s).collect();
+            assert_eq!(
+                before, now,
+                "burst of {value} at {at_s} s changed earlier events"
+            );
+            // ...and every sound more than 0.3 s after it is found, at its time.
+            for e in reference.iter().filter(|e| e.time > at_s + 0.01 + 0.3) {
+                assert!(
+                    events
+                        .iter()
+                        .any(|d| d.pattern == e.pattern && (d.time - e.time).abs() < 0.005),
+                    "burst of {value} at {at_s} s: {} at {:.3} s lost; found {events:#?}",
+                    e.pattern,
+                    e.time
+                );
+            }
+        }
+    }
+}
