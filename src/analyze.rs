@@ -143,17 +143,9 @@ struct JsonOutput<'a> {
     onsets: Option<&'a [OnsetRecord]>,
 }
 
-/// Writes `{"events":[...]}` (and `"bounce":[...]` when given) and a newline.
+/// Writes `{"events":[...]}` (and `"bounce":[...]`, `"onsets":[...]` when given) and a
+/// newline.
 pub fn write_json(
-    out: &mut dyn Write,
-    events: &[Event],
-    bounce: Option<&[Contact]>,
-) -> std::io::Result<()> {
-    write_json_with(out, events, bounce, None)
-}
-
-/// [`write_json`], with `"onsets":[...]` when given (`--explain`).
-pub fn write_json_with(
     out: &mut dyn Write,
     events: &[Event],
     bounce: Option<&[Contact]>,

@@ -303,7 +303,7 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let keep = analyze::Keep {
         scores: args.plot.is_some(),
-        onsets: args.explain || args.plot.is_some(),
+        onsets: args.explain,
     };
     let analysis = analyze::analyze_file_with(&args.recording, &config, keep, &mut |done| {
         // Short analyses finish before a bar would help.
@@ -340,7 +340,7 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
                 .bounce
                 .then(|| analyze::bounce(&analysis.events, &config));
             let onsets = analysis.onsets.as_deref().filter(|_| args.explain);
-            analyze::write_json_with(&mut out, &analysis.events, contacts.as_deref(), onsets)
+            analyze::write_json(&mut out, &analysis.events, contacts.as_deref(), onsets)
         }
         Format::Csv => analyze::write_csv(&mut out, &analysis.events),
     }

@@ -106,6 +106,13 @@ pub(crate) fn ratio<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_f64(round_to(*x, 4))
 }
 
+pub(crate) fn opt_ratio<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match x {
+        Some(v) => s.serialize_f64(round_to(*v, 4)),
+        None => s.serialize_none(),
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum DetectError {
     #[error("no patterns are configured: give --pattern NAME=FILE.wav or a config with [[pattern]] entries")]

@@ -510,14 +510,14 @@ pub struct OnsetRecord {
     pub decided_at: f64,
     /// The pattern it resembled most, and how much.
     pub best: Option<Arc<str>>,
-    #[serde(serialize_with = "opt_ratio")]
+    #[serde(serialize_with = "super::opt_ratio")]
     pub best_score: Option<f64>,
     /// The runner-up.
     pub second: Option<Arc<str>>,
-    #[serde(serialize_with = "opt_ratio")]
+    #[serde(serialize_with = "super::opt_ratio")]
     pub second_score: Option<f64>,
     /// Amplitude against the best pattern's take over the decision window.
-    #[serde(serialize_with = "opt_ratio")]
+    #[serde(serialize_with = "super::opt_ratio")]
     pub strength: Option<f64>,
     pub outcome: Outcome,
 }
@@ -535,13 +535,6 @@ impl OnsetRecord {
             strength: None,
             outcome,
         }
-    }
-}
-
-fn opt_ratio<S: serde::Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
-    match x {
-        Some(v) => super::ratio(v, s),
-        None => s.serialize_none(),
     }
 }
 
@@ -1027,13 +1020,6 @@ impl SpectralMatcher {
             take: best_template,
             ..
         } = self.pattern_scores[pi];
-        let second = self
-            .pattern_scores
-            .iter()
-            .enumerate()
-            .filter(|&(p, s)| p != pi && s.take != usize::MAX)
-            .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
-            .map(|(p, s)| (p, s.score));
         // A vocal hit stands out of relative quiet; a consonant inside speech follows a
         // vowel. Reject onsets whose last tens of milliseconds were nearly as loud.
         // The frames considered are those whose whole window lies in the quiet span.
@@ -1047,6 +1033,8 @@ impl SpectralMatcher {
             .frames_inside(quiet_from, quiet_to)
             .map(|f| self.levels[(f % cap) as usize])
             .fold(f32::NEG_INFINITY, f32::max);
+        // Once per onset, so that the explanation has it too: a sum over the 25 ms
+        // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
         let strength = (early / self.templates[best_template].early_energy.max(1e-12)).sqrt();
         let threshold = self.patterns[pi].threshold;
@@ -1067,9 +1055,16 @@ impl SpectralMatcher {
         } else {
             Outcome::Fired
         };
-        if let Some(records) = &mut self.explain {
+        if self.explain.is_some() {
+            let second = self
+                .pattern_scores
+                .iter()
+                .enumerate()
+                .filter(|&(p, s)| p != pi && s.take != usize::MAX)
+                .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
+                .map(|(p, s)| (p, s.score));
             let name = |i: usize| self.patterns[i].name.clone();
-            records.push(OnsetRecord {
+            let record = OnsetRecord {
                 time: time_sample as f64 / self.rate,
                 decided_at: self.consumed as f64 / self.rate,
                 best: Some(name(pi)),
@@ -1078,7 +1073,10 @@ impl SpectralMatcher {
                 second_score: second.map(|s| f64::from(s.1)),
                 strength: Some(strength),
                 outcome,
-            });
+            };
+            if let Some(records) = &mut self.explain {
+                records.push(record);
+            }
         }
         if outcome != Outcome::Fired {
             return;
