@@ -702,7 +702,6 @@ fn explain_lists_every_onset_with_what_became_of_it() {
         "below_threshold",
         "held_continues",
         "min_strength",
-        "superseded",
     ];
     for o in onsets.iter().filter(|o| o["outcome"] != "fired") {
         assert!(named.contains(&o["outcome"].as_str().unwrap()), "{o}");

@@ -9,6 +9,7 @@
 //! [`Detector::process`] allocates nothing, provided the caller's event vector has room.
 
 mod envelope;
+pub mod onset;
 pub mod spectral;
 pub mod waveform;
 

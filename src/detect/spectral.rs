@@ -3,16 +3,12 @@
 //!
 //! Frames: 256-sample Hann windows every 64 samples (at 22.05 kHz: 11.6 ms every
 //! 2.9 ms), 32 mel bands from 80 Hz to 7 kHz, in dB, floored 60 dB below the loudest
-//! band. Onsets (on the newest frame, no look-ahead): spectral flux (the rise of every
-//! band over the frame before) 20 dB over its mean of the last 250 ms; a level 15 dB
-//! over the tracked noise floor and 4 dB over the frames just before (a pitch gliding
-//! between bands is no onset); the previous sound fallen 9 dB below its peak (a "t-s" is
-//! one sound); at least 40 ms since the previous onset. A sound 25 dB louder than the
-//! opening of the last onset, once that opening has faded, is new regardless (the
-//! faint click of the lips before a hit does not hide the hit), and the click's onset,
-//! if still undecided, gives way. A few frames later the onset is placed on the
-//! samples (first 1.5 ms block within 12 dB of the loudest), and must stand 10 dB out
-//! of the 40-10 ms before it (a consonant inside speech follows a vowel).
+//! band. Onsets come from the onset stage ([`super::onset`]) on the same frames' band
+//! powers. A few frames later an onset is placed on the samples (first 1.5 ms block
+//! within 12 dB of the loudest), and must stand 10 dB out of the 40-10 ms before it (a
+//! consonant inside speech follows a vowel). The gates compare the sound in a frame,
+//! its power less twice the room's noise (`sound_level_db`), so that noise just under a
+//! sound neither hides it nor passes for speech around it.
 //! An enrolled take's onset is placed the same way, or where the onset detector would
 //! find it in a stream when that is earlier by more than a decision window (`take_onset`).
 //! A held sound that swells (a breathy "h" before its vowel) is placed where the stream
@@ -56,6 +52,7 @@ use realfft::num_complex::Complex32;
 use realfft::{RealFftPlanner, RealToComplex};
 use serde::Serialize;
 
+use super::onset::{OnsetDetector, OnsetParams};
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
@@ -81,39 +78,17 @@ const PITCH_MAX_HZ: f64 = 500.0;
 const PITCH_WINDOW_SECONDS: f64 = 0.1;
 /// A held sound is voiced when its autocorrelation reaches this at some lag.
 const VOICED_CORRELATION: f64 = 0.6;
-/// An onset needs the level to rise this much over the lowest of the frames just before.
-const ONSET_RISE_DB: f32 = 4.0;
-const RISE_FRAMES: u64 = 6;
 /// An onset is placed on the samples this many frames after its detection, once the
 /// attack has arrived.
 const PLACE_AFTER_FRAMES: u64 = 3;
-/// A new onset needs the previous sound to have fallen this far below its peak...
-const REARM_DB: f32 = 9.0;
-/// ...or this long since the previous onset.
-const REARM_AFTER_SECONDS: f64 = 0.25;
 /// Shift tolerance when comparing frames with a template.
 const MAX_SHIFT: usize = 1;
-const MIN_ONSET_GAP_SECONDS: f64 = 0.040;
-/// A sound this much louder than the opening (first `OPENING_FRAMES` frames) of the
-/// last onset, once that opening has faded `OPENING_FADED_DB`, is a new sound, whether
-/// or not `MIN_ONSET_GAP_SECONDS` has passed: the faint click of lips or tongue tens of
-/// milliseconds before a hit is an onset of its own (too faint to fire), and without
-/// this the hit after it went unseen. On the repeated set of `examples/eval_beatbox.rs`
-/// it finds 2 more cymbals (onset F1 0.972 to 1.000, F1 0.899 to 0.929; the same from
-/// 20 to 30 dB); the other sets are unchanged. The fade keeps a word's vowel after its
-/// quiet consonant one sound: without it, the speech of `scripts/eval-speech.sh` gave 5
-/// false events at 25 dB instead of 2.
-const LOUDER_SOUND_DB: f32 = 25.0;
-const OPENING_FADED_DB: f32 = 3.0;
-const OPENING_FRAMES: u64 = 3;
-/// Mean of the onset function over this long sets the adaptive threshold.
-const FLUX_MEAN_SECONDS: f64 = 0.25;
-/// Margin of the flux over its recent mean, dB summed over bands.
-const FLUX_MARGIN_DB: f32 = 20.0;
-/// An onset needs a frame this far above the noise floor, dB.
+/// An onset is placed on sound this far above the noise floor, dB.
 const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
-/// The noise floor follows quieter frames at once and rises this fast, dB per second.
+/// The noise floor rises this fast, dB per second, and falls this fast towards a quieter
+/// frame (see [`OnsetParams`]).
 const FLOOR_RISE_DB_PER_S: f32 = 3.0;
+const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 const REFINE_BLOCK_SECONDS: f64 = 0.0015;
 /// An onset is the first block within this many dB of the sound's loudest. On the real
 /// recordings of `examples/eval_beatbox.rs`, 12-16 dB places onsets best; 20-30 dB
@@ -192,6 +167,8 @@ struct Analyzer {
     bands: Vec<MelBand>,
     /// See [`cepstrum_basis`].
     cepstrum: Vec<f32>,
+    /// The last frame's band powers (linear), for the onset stage.
+    power: Vec<f32>,
 }
 
 impl Analyzer {
@@ -251,6 +228,7 @@ impl Analyzer {
             window,
             bands,
             cepstrum: cepstrum_basis(),
+            power: vec![0.0; BANDS],
         }
     }
 
@@ -266,13 +244,14 @@ impl Analyzer {
             self.fft
                 .process_with_scratch(&mut self.fft_in, &mut self.spectrum, &mut self.scratch);
         let mut loudest = f32::NEG_INFINITY;
-        for (band, o) in self.bands.iter().zip(out.iter_mut()) {
+        for ((band, o), p) in self.bands.iter().zip(out.iter_mut()).zip(&mut self.power) {
             let e: f32 = band
                 .weights
                 .iter()
                 .zip(&self.spectrum[band.first_bin..])
                 .map(|(w, c)| w * c.norm_sqr())
                 .sum();
+            *p = e;
             *o = 10.0 * (e + 1e-12).log10();
             loudest = loudest.max(*o);
         }
@@ -282,6 +261,42 @@ impl Analyzer {
         10.0 * ((power / samples.len() as f64) + 1e-12).log10() as f32
     }
 }
+
+/// Onset times (seconds, each at the centre of the frame where the onset function
+/// peaked) that the onset stage with `params` finds in `samples` at `rate` Hz, through
+/// the matcher's own frames: for measuring the stage alone (`examples/onset_sweep.rs`).
+pub fn onset_times(samples: &[f32], rate: f64, params: OnsetParams) -> Vec<f64> {
+    let mut analyzer = Analyzer::new(rate);
+    let (win, hop) = (analyzer.win, analyzer.hop);
+    let mut onsets = OnsetDetector::new(params, BANDS, win, hop, rate);
+    let mut frame = vec![0.0f32; BANDS];
+    let mut found = Vec::new();
+    let mut start = 0;
+    while start + win <= samples.len() {
+        analyzer.frame(&samples[start..start + win], &mut frame);
+        if let Some(onset) = onsets.push(&analyzer.power) {
+            found.push((onset.frame as usize * hop + win / 2) as f64 / rate);
+        }
+        start += hop;
+    }
+    found
+}
+
+/// The level of the sound in a frame of `level_db`, over a room whose noise is at
+/// `floor_db`: the frame's power less twice the noise's, in dB (`SILENT_DB` when that
+/// is nothing). The gates compare sounds with each other: noise a few dB under a
+/// sound must not pass for a sound just before it, or for speech around it.
+fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
+    let excess = 10f32.powf(level_db / 10.0) - 2.0 * 10f32.powf(floor_db / 10.0);
+    if excess > 0.0 {
+        (10.0 * excess.log10()).max(SILENT_DB)
+    } else {
+        SILENT_DB
+    }
+}
+
+/// The level of a frame without sound, dB.
+const SILENT_DB: f32 = -120.0;
 
 /// Pooled bands are floored this far below the loudest pooled band.
 const POOLED_RANGE_DB: f32 = 50.0;
@@ -416,19 +431,12 @@ pub struct SpectralMatcher {
     /// Ring of log-mel frames, `BANDS` each.
     frames: Vec<f32>,
     levels: Vec<f32>,
-    flux: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
     frame_count: u64,
-    flux_mean_len: usize,
+    onsets: OnsetDetector,
+    /// The broadband level of the room: follows quieter frames at once, rises slowly.
     noise_floor_db: f32,
-    last_onset_frame: Option<u64>,
-    armed: bool,
-    sound_peak_db: f32,
-    /// The loudest of the last onset's first `OPENING_FRAMES` frames.
-    opening_peak_db: f32,
-    /// The quietest frame since that opening.
-    dip_db: f32,
     pending: Vec<PendingOnset>,
     held: Option<Held>,
     frame_buf: Vec<f32>,
@@ -480,8 +488,6 @@ pub enum Outcome {
     HeldContinues,
     /// Quieter than `min_strength` times the take.
     MinStrength,
-    /// A sound far louder came right after this faint onset, which gave way to it.
-    Superseded,
 }
 
 impl Outcome {
@@ -494,7 +500,6 @@ impl Outcome {
             Outcome::BelowThreshold => "below_threshold",
             Outcome::HeldContinues => "held_continues",
             Outcome::MinStrength => "min_strength",
-            Outcome::Superseded => "superseded",
         }
     }
 }
@@ -520,22 +525,6 @@ pub struct OnsetRecord {
     #[serde(serialize_with = "super::opt_ratio")]
     pub strength: Option<f64>,
     pub outcome: Outcome,
-}
-
-impl OnsetRecord {
-    /// An onset decided before it was classified.
-    fn undecided(time: f64, decided_at: f64, outcome: Outcome) -> Self {
-        Self {
-            time,
-            decided_at,
-            best: None,
-            best_score: None,
-            second: None,
-            second_score: None,
-            strength: None,
-            outcome,
-        }
-    }
 }
 
 /// One pattern's score for an onset: the best of its takes and of its tracked
@@ -679,17 +668,11 @@ impl SpectralMatcher {
             consumed: 0,
             since_frame: 0,
             frames: vec![0.0; frame_capacity * BANDS],
-            levels: vec![-120.0; frame_capacity],
-            flux: vec![0.0; frame_capacity],
+            levels: vec![SILENT_DB; frame_capacity],
             frame_capacity,
             frame_count: 0,
-            flux_mean_len: ((FLUX_MEAN_SECONDS / HOP_SECONDS) as usize).max(1),
+            onsets: OnsetDetector::new(OnsetParams::default(), BANDS, win, analyzer.hop, rate),
             noise_floor_db: 0.0,
-            last_onset_frame: None,
-            armed: true,
-            sound_peak_db: f32::NEG_INFINITY,
-            opening_peak_db: f32::NEG_INFINITY,
-            dip_db: f32::INFINITY,
             pending: Vec::with_capacity(16),
             held: None,
             frame_buf: vec![0.0; BANDS],
@@ -844,103 +827,29 @@ impl SpectralMatcher {
         let level = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
         let f = self.frame_count;
         let slot = (f % self.frame_capacity as u64) as usize;
-        let flux = if f == 0 {
-            0.0
-        } else {
-            let prev = self.frame(f - 1);
-            prev.iter()
-                .zip(&self.frame_buf)
-                .map(|(p, c)| (c - p).max(0.0))
-                .sum::<f32>()
-        };
         self.frames[slot * BANDS..(slot + 1) * BANDS].copy_from_slice(&self.frame_buf);
-        self.levels[slot] = level;
-        self.flux[slot] = flux;
         self.frame_count += 1;
-        // Noise floor: follows quieter frames at once, rises slowly.
+        // Noise floor: follows quieter frames, at a bounded rate (as the onset stage's).
         let rise = FLOOR_RISE_DB_PER_S * HOP_SECONDS as f32;
+        let fall = FLOOR_FALL_DB_PER_S * HOP_SECONDS as f32;
         self.noise_floor_db = if f == 0 {
             level
         } else {
-            (self.noise_floor_db + rise).min(level)
+            (self.noise_floor_db + rise).min(level.max(self.noise_floor_db - fall))
         };
+        self.levels[slot] = sound_level_db(level, self.noise_floor_db);
 
         self.extend_recognised(f);
-        self.detect_onset(f);
-        self.decide_pending(out);
-        self.follow_held(f, out);
-    }
-
-    /// Onset detection on the newest frame `f`: a rising edge of the onset function over
-    /// its recent mean plus a margin, loud enough over the noise floor, once the detector
-    /// has re-armed (the previous sound fell `REARM_DB` below its peak) and at least
-    /// `MIN_ONSET_GAP_SECONDS` after the previous onset, or at once for a sound
-    /// `LOUDER_SOUND_DB` louder than the previous onset's opening.
-    fn detect_onset(&mut self, f: u64) {
-        let cap = self.frame_capacity as u64;
-        let at = |g: u64| self.flux[(g % cap) as usize];
-        let level = self.levels[(f % cap) as usize];
-        self.sound_peak_db = self.sound_peak_db.max(level);
-        let since = self.last_onset_frame.map_or(u64::MAX, |last| f - last);
-        if since <= OPENING_FRAMES {
-            self.opening_peak_db = self.opening_peak_db.max(level);
-        } else {
-            self.dip_db = self.dip_db.min(level);
-        }
-        let faded = self.dip_db <= self.opening_peak_db - OPENING_FADED_DB;
-        let far_louder =
-            since > OPENING_FRAMES && faded && level >= self.opening_peak_db + LOUDER_SOUND_DB;
-        if level <= self.sound_peak_db - REARM_DB
-            || since as f64 * HOP_SECONDS >= REARM_AFTER_SECONDS
-            || far_louder
-        {
-            self.armed = true;
-        }
-        let too_soon = (since as f64) * HOP_SECONDS < MIN_ONSET_GAP_SECONDS && !far_louder;
-        if f < 2 || !self.armed || too_soon {
-            return;
-        }
-        let value = at(f);
-        let n = (self.flux_mean_len as u64).min(f - 1);
-        let mean = (1..=n).map(|d| at(f - d)).sum::<f32>() / n.max(1) as f32;
-        if value < mean + FLUX_MARGIN_DB || level < self.noise_floor_db + ONSET_ABOVE_FLOOR_DB {
-            return;
-        }
-        // A new sound raises the level; a sound that only changes colour (a falling
-        // pitch moving between bands) does not.
-        let before = (1..=RISE_FRAMES.min(f))
-            .map(|d| self.levels[((f - d) % cap) as usize])
-            .fold(f32::INFINITY, f32::min);
-        if level < before + ONSET_RISE_DB {
-            return;
-        }
-        self.armed = false;
-        self.sound_peak_db = level;
-        self.opening_peak_db = level;
-        self.dip_db = f32::INFINITY;
-        let previous_onset = self.last_onset_frame.replace(f);
-        if far_louder {
-            // The onset before was this sound's faint approach: if still undecided, it
-            // gives way (decided, it stays decided).
-            if self.pending.last().map(|p| p.detected) == previous_onset {
-                if let (Some(gone), Some(records)) = (self.pending.pop(), &mut self.explain) {
-                    let at = gone
-                        .placed
-                        .map_or(gone.detected * self.analyzer.hop as u64, |p| p.0);
-                    records.push(OnsetRecord::undecided(
-                        at as f64 / self.rate,
-                        self.consumed as f64 / self.rate,
-                        Outcome::Superseded,
-                    ));
-                }
+        if let Some(onset) = self.onsets.push(&self.analyzer.power) {
+            if self.pending.len() < self.pending.capacity() {
+                self.pending.push(PendingOnset {
+                    detected: onset.frame,
+                    placed: None,
+                });
             }
         }
-        if self.pending.len() < self.pending.capacity() {
-            self.pending.push(PendingOnset {
-                detected: f,
-                placed: None,
-            });
-        }
+        self.decide_pending(out);
+        self.follow_held(f, out);
     }
 
     /// The onset is in or just before frame `c`'s window: the first short block there

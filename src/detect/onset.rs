@@ -1,0 +1,362 @@
+//! Onset stage: where a new sound starts, found causally one frame after the peak of
+//! an onset function over band powers. Owns the per-band noise floors and the recent
+//! onset function; knows nothing of patterns, so no later decision can feed back on it.
+//!
+//! The onset function is a spectral flux on a noise-floored log spectrum (after Böck
+//! and Widmer's SuperFlux, with the per-band floor of Stowell and Plumbley's adaptive
+//! whitening). Each band's power gets `floor_weight` times its own noise floor added
+//! before the log, so a band at the room's noise level barely moves while a band that
+//! rises out of it moves by its signal-to-noise ratio; the rise is taken over the
+//! loudest of the band and its two neighbours one window earlier (a pitch gliding
+//! between bands, or a sound's own flutter, rises little); the function is the mean
+//! rise over bands, in dB. An onset is a local maximum of it that stands
+//! `threshold_db` over its mean of the last `mean_seconds`, at least `min_gap_seconds`
+//! after the previous one, once the previous sound has fallen back (`rearm_fall`) or
+//! when it is far louder than that sound (`new_sound_db`).
+//!
+//! Because the function is a log ratio, its statistics on steady noise do not depend on
+//! the noise's level or colour: `floor_weight` and `threshold_db` are the pair that
+//! gives no false onset in a minute of steady white or red noise at any level, and a
+//! quiet room and a loud one behave alike. The sweeps are in `docs/onset-stage.md`.
+//!
+//! Runs on the detector thread, inside the spectral matcher; allocates only in `new`.
+
+/// Settings of the onset stage.
+#[derive(Debug, Clone, Copy)]
+pub struct OnsetParams {
+    /// Each band's noise floor, times this, is added to its power before the log.
+    pub floor_weight: f32,
+    /// Margin of the onset function over its recent mean, dB of mean band rise.
+    pub threshold_db: f32,
+    /// The recent mean is taken over this long.
+    pub mean_seconds: f64,
+    /// Two onsets are at least this far apart: about the shortest gap at which two
+    /// clicks are heard as two (Hirsh, 1959).
+    pub min_gap_seconds: f64,
+    /// A band's noise floor rises at most this fast, dB per second: a room's noise
+    /// changes over seconds, a sound's tail falls faster, and a burst of any loudness
+    /// cannot lift it...
+    pub floor_rise_db_per_s: f32,
+    /// ...and falls at most this fast: a few dB over a dropout of 10 ms of silence
+    /// (or of samples that were not numbers), which must not leave the floor far under
+    /// the room for seconds afterwards.
+    pub floor_fall_db_per_s: f32,
+    /// After an onset that rose by `v` dB (mean band rise), the next needs the sound to
+    /// have fallen back, as a mean over bands from each band's peak since, by this
+    /// fraction of `v`, or by `rearm_fall_max_db` (a sound at a hundredth of its peak
+    /// power has ended, however loud it rose in a quiet room)...
+    pub rearm_fall: f32,
+    pub rearm_fall_max_db: f32,
+    /// ...or this long to have passed. Until then, an onset is only a new sound if it
+    /// rises `new_sound_db` (mean over bands) over the loudest that each band has been
+    /// since the last sound began.
+    pub rearm_after_seconds: f64,
+    pub new_sound_db: f32,
+}
+
+impl Default for OnsetParams {
+    fn default() -> Self {
+        Self {
+            floor_weight: 16.0,
+            threshold_db: 1.0,
+            mean_seconds: 0.1,
+            min_gap_seconds: 0.02,
+            floor_rise_db_per_s: 3.0,
+            floor_fall_db_per_s: 100.0,
+            rearm_fall: 1.0,
+            rearm_fall_max_db: 20.0,
+            new_sound_db: 15.0,
+            rearm_after_seconds: 0.25,
+        }
+    }
+}
+
+/// Band power below which a band is taken to hold nothing (-100 dB: below the noise
+/// of 16-bit audio).
+const MIN_BAND_POWER: f32 = 1e-10;
+
+/// An onset found by [`OnsetDetector::push`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Onset {
+    /// Frame at which the onset function peaked.
+    pub frame: u64,
+    /// The onset function there, dB of mean band rise.
+    pub flux_db: f32,
+}
+
+/// Causal onset detector over band powers, one frame at a time.
+pub struct OnsetDetector {
+    params: OnsetParams,
+    bands: usize,
+    /// Frames between the compared frames: one window, so that an attack's whole rise
+    /// lies in one difference.
+    lag: usize,
+    mean_frames: usize,
+    min_gap_frames: u64,
+    floor_rise: f32,
+    floor_fall: f32,
+    /// Per band: the noise floor (linear power).
+    floor: Vec<f32>,
+    /// Ring of floored log spectra, `lag + 2` frames of `bands`.
+    history: Vec<f32>,
+    /// Ring of onset-function values, `mean_frames + 2`.
+    odf: Vec<f32>,
+    frames: u64,
+    last_onset: Option<u64>,
+    rearm_after_frames: u64,
+    /// Per band: the loudest floored log level since the last onset.
+    peak: Vec<f32>,
+    /// The onset function at the last onset; `None` once its sound has faded.
+    unarmed_rise: Option<f32>,
+    /// Frame of the last onset: where the current sound began.
+    sound_start: u64,
+}
+
+impl OnsetDetector {
+    /// For frames of `bands` band powers, `win` samples long every `hop` samples, at
+    /// `rate` Hz.
+    pub fn new(params: OnsetParams, bands: usize, win: usize, hop: usize, rate: f64) -> Self {
+        let hop_seconds = hop as f64 / rate;
+        let lag = win.div_ceil(hop).max(1);
+        let mean_frames = ((params.mean_seconds / hop_seconds) as usize).max(1);
+        Self {
+            bands,
+            lag,
+            mean_frames,
+            min_gap_frames: (params.min_gap_seconds / hop_seconds) as u64,
+            floor_rise: 10f32.powf(params.floor_rise_db_per_s * hop_seconds as f32 / 10.0),
+            floor_fall: 10f32.powf(-params.floor_fall_db_per_s * hop_seconds as f32 / 10.0),
+            floor: vec![0.0; bands],
+            history: vec![0.0; (lag + 2) * bands],
+            odf: vec![0.0; mean_frames + 2],
+            frames: 0,
+            last_onset: None,
+            rearm_after_frames: (params.rearm_after_seconds / hop_seconds) as u64,
+            peak: vec![0.0; bands],
+            unarmed_rise: None,
+            sound_start: 0,
+            params,
+        }
+    }
+
+    /// Feeds the next frame's band powers (linear); returns the onset whose peak was
+    /// the frame before, if there is one.
+    pub fn push(&mut self, power: &[f32]) -> Option<Onset> {
+        let f = self.frames;
+        self.frames += 1;
+        let (bands, lag) = (self.bands, self.lag as u64);
+        let slots = (self.lag + 2) as u64;
+        let row = |g: u64| ((g % slots) as usize) * bands;
+        let now = row(f);
+        for (b, &p) in power.iter().enumerate().take(bands) {
+            let p = if p.is_finite() {
+                p.max(MIN_BAND_POWER)
+            } else {
+                MIN_BAND_POWER
+            };
+            let fl = &mut self.floor[b];
+            *fl = if f == 0 {
+                p
+            } else {
+                (*fl * self.floor_rise).min(p.max(*fl * self.floor_fall))
+            };
+            self.history[now + b] = 10.0 * (p + self.params.floor_weight * *fl).log10();
+        }
+        let odf = if f >= lag {
+            let before = row(f - lag);
+            let mut rise = 0.0f32;
+            for b in 0..bands {
+                let lo = b.saturating_sub(1);
+                let hi = (b + 1).min(bands - 1);
+                let reference = self.history[before + lo..=before + hi]
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |m, &x| m.max(x));
+                rise += (self.history[now + b] - reference).max(0.0);
+            }
+            rise / bands as f32
+        } else {
+            0.0
+        };
+        let n = self.odf.len() as u64;
+        self.odf[(f % n) as usize] = odf;
+        // The candidate is the frame before: a peak once the function falls again.
+        if f < 2 {
+            return None;
+        }
+        let c = f - 1;
+        if let Some(rise) = self.unarmed_rise {
+            let start = self.sound_start;
+            // The frame a window before the candidate: where an attack rises from.
+            let g = c.saturating_sub(lag);
+            let mut fall = 0.0f32;
+            if g > start {
+                let trough = row(g);
+                for (b, peak) in self.peak.iter_mut().enumerate() {
+                    let level = self.history[trough + b];
+                    *peak = peak.max(level);
+                    fall += *peak - level;
+                }
+            }
+            if fall / bands as f32
+                >= (self.params.rearm_fall * rise).min(self.params.rearm_fall_max_db)
+                || c - start >= self.rearm_after_frames
+            {
+                self.unarmed_rise = None;
+            }
+        }
+        let at = |g: u64| self.odf[(g % n) as usize];
+        let value = at(c);
+        if value <= odf || value < at(c - 1) {
+            return None;
+        }
+        let older = (self.mean_frames as u64).min(c);
+        let mean = (1..=older).map(|d| at(c - d)).sum::<f32>() / older.max(1) as f32;
+        if value < mean + self.params.threshold_db {
+            return None;
+        }
+        if self
+            .last_onset
+            .is_some_and(|last| c - last < self.min_gap_frames)
+        {
+            return None;
+        }
+        if self.unarmed_rise.is_some() {
+            // Before the last sound has faded, only a far louder one is new (the faint
+            // click of the lips before a hit does not hide the hit).
+            let now = row(c);
+            let mut over = 0.0f32;
+            for b in 0..bands {
+                let lo = b.saturating_sub(1);
+                let hi = (b + 1).min(bands - 1);
+                let loudest = self.peak[lo..=hi]
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |m, &x| m.max(x));
+                over += (self.history[now + b] - loudest).max(0.0);
+            }
+            if over / (bands as f32) < self.params.new_sound_db {
+                return None;
+            }
+            self.unarmed_rise = None;
+        }
+        self.last_onset = Some(c);
+        self.sound_start = c;
+        self.unarmed_rise = Some(value);
+        let at_onset = row(c);
+        self.peak
+            .copy_from_slice(&self.history[at_onset..at_onset + bands]);
+        Some(Onset {
+            frame: c,
+            flux_db: value,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RATE: f64 = 22_050.0;
+    const WIN: usize = 256;
+    const HOP: usize = 64;
+    const BANDS: usize = 16;
+
+    /// Band powers of a frame: the mean square of `frame` split into `BANDS` equal
+    /// stretches of its spectrum would need an FFT; for the stage alone a crude
+    /// filterbank of sample-difference orders is enough (white noise is flat in it, a
+    /// burst rises in every band).
+    fn powers(frame: &[f32]) -> [f32; BANDS] {
+        let mut out = [0.0f32; BANDS];
+        for (b, o) in out.iter_mut().enumerate() {
+            let k = b + 1;
+            *o = frame
+                .windows(k + 1)
+                .map(|w| (w[k] - w[0]).powi(2))
+                .sum::<f32>()
+                / frame.len() as f32;
+        }
+        out
+    }
+
+    fn onsets(signal: &[f32]) -> Vec<f64> {
+        let mut d = OnsetDetector::new(OnsetParams::default(), BANDS, WIN, HOP, RATE);
+        let mut found = Vec::new();
+        let mut start = 0;
+        while start + WIN <= signal.len() {
+            if let Some(o) = d.push(&powers(&signal[start..start + WIN])) {
+                found.push((o.frame as usize * HOP + WIN) as f64 / RATE);
+            }
+            start += HOP;
+        }
+        found
+    }
+
+    fn noise(n: usize, amplitude: f32, seed: u64) -> Vec<f32> {
+        let mut state = seed | 1;
+        (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
+            })
+            .collect()
+    }
+
+    /// Decaying noise bursts 30 ms long at `times` (s), each `burst` in amplitude, over
+    /// noise of amplitude `floor`, `seconds` long.
+    fn bursts(times: &[f64], burst: f32, floor: f32, seconds: f64) -> Vec<f32> {
+        let mut s = noise((seconds * RATE) as usize, floor, 7);
+        for (i, &t) in times.iter().enumerate() {
+            let at = (t * RATE) as usize;
+            for (k, x) in noise(660, burst, 100 + i as u64).iter().enumerate() {
+                s[at + k] += x * (-(k as f32) / 200.0).exp();
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn steady_noise_of_any_level_has_no_onset() {
+        for amplitude in [1e-4, 1e-2, 0.5] {
+            let found = onsets(&noise(10 * RATE as usize, amplitude, 3));
+            assert!(found.len() <= 1, "{amplitude}: {found:?}");
+        }
+    }
+
+    #[test]
+    fn hits_30_ms_apart_are_each_an_onset_in_quiet_and_in_noise() {
+        // 30 ms bursts with 30 ms between them.
+        let times = [0.2, 0.26, 0.32, 0.5, 0.56, 0.8];
+        // Bursts at -12 dB over noise at -60 and at -30 dB.
+        for floor in [0.001, 0.03] {
+            let found = onsets(&bursts(&times, 0.25, floor, 1.0));
+            assert_eq!(found.len(), times.len(), "noise {floor}: {found:?}");
+            for (f, t) in found.iter().zip(times) {
+                assert!((f - t).abs() < 0.015, "noise {floor}: onset {f} for {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_faint_click_does_not_hide_the_hit_right_after_it() {
+        // A click 40 dB under the hit, 20 ms before it: the click has not faded, but
+        // the hit is far louder.
+        let mut s = bursts(&[0.3], 0.005, 0.0001, 1.0);
+        for (k, x) in noise(660, 0.5, 9).iter().enumerate() {
+            s[(0.32 * RATE) as usize + k] += x * (-(k as f32) / 200.0).exp();
+        }
+        let found = onsets(&s);
+        assert!(found.iter().any(|t| (t - 0.32).abs() < 0.015), "{found:?}");
+    }
+
+    #[test]
+    fn a_burst_of_any_loudness_does_not_lift_the_floor() {
+        let mut s = bursts(&[0.6], 0.05, 0.001, 1.0);
+        for x in &mut s[4_000..4_220] {
+            *x = 1e6;
+        }
+        let found = onsets(&s);
+        assert_eq!(found.len(), 2, "{found:?}");
+        assert!((found[1] - 0.6).abs() < 0.015, "{found:?}");
+    }
+}
