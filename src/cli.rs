@@ -263,6 +263,12 @@ impl PatternSource {
             config.detector.channel = Some(channel);
         }
         if let Some(guard) = self.speech_guard {
+            if config.detector.method != config::Method::Spectral {
+                anyhow::bail!(
+                    "--speech-guard is a setting of the spectral method; the method here is \"{}\"",
+                    config.detector.method.name()
+                );
+            }
             config.detector.speech_guard_seconds = guard;
         }
         config.detector.validate("command line")?;

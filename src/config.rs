@@ -67,6 +67,14 @@ impl Method {
             Method::Spectral => 0.3,
         }
     }
+
+    /// The name a config and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Waveform => "waveform",
+            Method::Spectral => "spectral",
+        }
+    }
 }
 
 /// Bounce style of a contact.
@@ -135,12 +143,31 @@ struct RawDetector {
     sample_rate: Option<u32>,
     threshold: Option<f64>,
     continuous_threshold: Option<f64>,
-    suppression_seconds: Option<f64>,
     max_pattern_seconds: Option<f64>,
     channel: Option<u16>,
+    spectral: Option<RawSpectral>,
+    waveform: Option<RawWaveform>,
+    // Keys of one method, once in [detector]: refused with where they now live.
+    suppression_seconds: Option<toml::Value>,
+    decision_seconds: Option<toml::Value>,
+    speech_guard_seconds: Option<toml::Value>,
+    min_strength: Option<toml::Value>,
+}
+
+/// `[detector.spectral]`: settings only the spectral method has.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSpectral {
     decision_seconds: Option<f64>,
     speech_guard_seconds: Option<f64>,
     min_strength: Option<f64>,
+}
+
+/// `[detector.waveform]`: settings only the waveform method has.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawWaveform {
+    suppression_seconds: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -505,23 +532,57 @@ impl RawConfig {
     fn validate(self, base: &Path, origin: &str) -> Result<Config, ConfigError> {
         let defaults = DetectorSettings::default();
         let d = self.detector;
+        let item = format!("{origin}, [detector]");
+        for (key, value, table) in [
+            ("suppression_seconds", &d.suppression_seconds, "waveform"),
+            ("decision_seconds", &d.decision_seconds, "spectral"),
+            ("speech_guard_seconds", &d.speech_guard_seconds, "spectral"),
+            ("min_strength", &d.min_strength, "spectral"),
+        ] {
+            if value.is_some() {
+                return Err(invalid(
+                    &item,
+                    format!(
+                        "{key} is a setting of the {table} method: put it in [detector.{table}]"
+                    ),
+                ));
+            }
+        }
+        let method = d.method.unwrap_or(defaults.method);
+        let (other, other_name) = match method {
+            Method::Spectral => (d.waveform.is_some(), "waveform"),
+            Method::Waveform => (d.spectral.is_some(), "spectral"),
+        };
+        if other {
+            return Err(invalid(
+                &item,
+                format!(
+                    "[detector.{other_name}] is for method = \"{other_name}\", but this config's method is \"{}\"",
+                    method.name()
+                ),
+            ));
+        }
+        let spectral = d.spectral.unwrap_or_default();
+        let waveform = d.waveform.unwrap_or_default();
         let detector = DetectorSettings {
-            method: d.method.unwrap_or(defaults.method),
+            method,
             sample_rate: d.sample_rate.unwrap_or(defaults.sample_rate),
             threshold: d.threshold,
             continuous_threshold: d
                 .continuous_threshold
                 .unwrap_or(defaults.continuous_threshold),
-            suppression_seconds: d.suppression_seconds,
+            suppression_seconds: waveform.suppression_seconds,
             max_pattern_seconds: d
                 .max_pattern_seconds
                 .unwrap_or(defaults.max_pattern_seconds),
             channel: d.channel,
-            decision_seconds: d.decision_seconds.unwrap_or(defaults.decision_seconds),
-            speech_guard_seconds: d
+            decision_seconds: spectral
+                .decision_seconds
+                .unwrap_or(defaults.decision_seconds),
+            speech_guard_seconds: spectral
                 .speech_guard_seconds
                 .unwrap_or(defaults.speech_guard_seconds),
-            min_strength: d.min_strength.unwrap_or(defaults.min_strength),
+            min_strength: spectral.min_strength.unwrap_or(defaults.min_strength),
         };
         detector.validate(origin)?;
 
@@ -813,7 +874,10 @@ fn check_thresholds(
     spec: &PatternSpec,
     detector: &DetectorSettings,
 ) -> Result<(), ConfigError> {
-    if spec.kind != PatternKind::Continuous {
+    // The waveform method holds a continuous event with hysteresis on one score; the
+    // spectral method's continuous threshold is a frame's likeness to the held
+    // spectrum, another quantity, so either may be the higher there.
+    if spec.kind != PatternKind::Continuous || detector.method != Method::Waveform {
         return Ok(());
     }
     let high = spec.threshold.unwrap_or(detector.threshold());

@@ -381,6 +381,19 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
                 "examples/beat.wav",
                 "-c",
                 "config/onomato.toml",
+                "--method",
+                "waveform",
+                "--speech-guard",
+                "0",
+            ],
+            "--speech-guard is a setting of the spectral method; the method here is \"waveform\"",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
                 "--gravity",
                 "0",
             ],
@@ -712,5 +725,35 @@ fn explain_lists_every_onset_with_what_became_of_it() {
     assert_eq!(
         table.lines().filter(|l| l.ends_with(" fired")).count(),
         events.len()
+    );
+}
+
+#[test]
+fn one_threshold_scale_for_both_methods_and_a_low_threshold_is_accepted() {
+    // The example config's held sound keeps 0.3 as its continuous threshold: for the
+    // spectral method that is a frame's likeness to the held spectrum, not a hysteresis
+    // under the match threshold, so a threshold of 0.2 is accepted, and the example's
+    // sounds are still found, each once.
+    assert_matches_truth(
+        &analyze_example(&["--threshold", "0.2"]),
+        &truth(),
+        &SPECTRAL,
+    );
+    // For the waveform method it is a hysteresis, and the error says which.
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--method",
+        "waveform",
+        "--threshold",
+        "0.2",
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("continuous_threshold (0.3) must not be above threshold (0.2)"),
+        "{}",
+        stderr(&out)
     );
 }
