@@ -309,7 +309,8 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let keep = analyze::Keep {
         scores: args.plot.is_some(),
-        onsets: args.explain,
+        // The plot draws the onsets that did not fire.
+        onsets: args.explain || args.plot.is_some(),
     };
     let analysis = analyze::analyze_file_with(&args.recording, &config, keep, &mut |done| {
         // Short analyses finish before a bar would help.

@@ -2,7 +2,10 @@
 //! pattern with its match score over time, the threshold as a dashed line, and a mark
 //! at every detected event (a line for an impulse, a shaded span for a held sound), as
 //! in figure 2 of the paper. With the spectral method, which scores a sound only at its
-//! onset, each panel shows the score of each decided event as a dot.
+//! onset, each panel shows the score of each decided event as a dot, and every onset
+//! that did not fire as a ring at its best score, under the pattern it resembled most,
+//! with the name of the gate that stopped it (as `--explain` lists them); the waveform
+//! panel marks those onsets with a grey line.
 //!
 //! Runs on the main thread of `onomato analyze`, after the analysis.
 
@@ -12,6 +15,7 @@ use plotters::prelude::*;
 
 use crate::analyze::Analysis;
 use crate::config::PatternKind;
+use crate::detect::Outcome;
 
 /// Width of the picture, pixels; curves are reduced to one min/max pair per pixel.
 const WIDTH: u32 = 1400;
@@ -120,6 +124,14 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
             }
             .map_err(|e| fail(&e))?;
         }
+        for o in stopped(analysis) {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(o.time, -(peak as f64) * 0.5), (o.time, peak as f64 * 0.5)],
+                    BLACK.mix(0.3),
+                )))
+                .map_err(|e| fail(&e))?;
+        }
     }
 
     // One panel per pattern: score, threshold, events.
@@ -226,6 +238,30 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
                 .label(format!("{name}: score at the decision"))
                 .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
         }
+        let rejected: Vec<_> = stopped(analysis)
+            .filter(|o| o.best.as_deref() == Some(&**name))
+            .collect();
+        if !rejected.is_empty() {
+            let at = |o: &crate::detect::OnsetRecord| {
+                (o.time, o.best_score.unwrap_or(0.0).clamp(0.0, 1.05))
+            };
+            chart
+                .draw_series(
+                    rejected
+                        .iter()
+                        .map(|o| Circle::new(at(o), 4, c.stroke_width(1))),
+                )
+                .map_err(|e| fail(&e))?
+                .label(format!("{name}: onset that did not fire"))
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+            let style = ("sans-serif", 10).into_font().color(&BLACK.mix(0.7));
+            chart
+                .draw_series(rejected.iter().map(|o| {
+                    let (t, y) = at(o);
+                    Text::new(o.outcome.as_str(), (t, (y + 0.08).min(1.0)), style.clone())
+                }))
+                .map_err(|e| fail(&e))?;
+        }
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperRight)
@@ -237,4 +273,13 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
     }
     root.present().map_err(|e| fail(&e))?;
     Ok(())
+}
+
+/// The onsets of `analysis` (when kept) that did not fire.
+fn stopped(analysis: &Analysis) -> impl Iterator<Item = &crate::detect::OnsetRecord> {
+    analysis
+        .onsets
+        .iter()
+        .flatten()
+        .filter(|o| o.outcome != Outcome::Fired)
 }

@@ -98,7 +98,7 @@ fn the_plot_shows_each_pattern_score_threshold_and_every_event() {
 }
 
 #[test]
-fn the_spectral_plot_shows_the_score_of_each_decision() {
+fn the_spectral_plot_shows_the_score_of_each_decision_and_why_other_onsets_did_not_fire() {
     let dir = common::temp_dir("plot-spectral");
     let (svg, json) = plot(&dir, "spectral");
     let t = texts(&svg);
@@ -109,6 +109,48 @@ fn the_spectral_plot_shows_the_score_of_each_decision() {
             "{t:?}"
         );
     }
-    // A dot per event, plus one per legend.
-    assert_eq!(svg.matches("<circle").count(), events.len() + 4);
+    // Every onset that did not fire, as `--explain` lists it, is a ring under the
+    // pattern it resembled most, labelled with the gate that stopped it.
+    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args([
+            "analyze",
+            "examples/beat.wav",
+            "-c",
+            "config/onomato.toml",
+            "--explain",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let explained: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stopped: Vec<&serde_json::Value> = explained["onsets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|o| o["outcome"] != "fired")
+        .collect();
+    assert!(
+        !stopped.is_empty(),
+        "the example has onsets that do not fire"
+    );
+    for o in &stopped {
+        let outcome = o["outcome"].as_str().unwrap();
+        let labels = t.iter().filter(|x| *x == outcome).count();
+        let expected = stopped.iter().filter(|p| p["outcome"] == outcome).count();
+        assert_eq!(labels, expected, "labels '{outcome}'");
+    }
+    let patterns_with_rings = ["tick", "pop", "boom", "hoo"]
+        .iter()
+        .filter(|name| t.contains(&format!("{name}: onset that did not fire")))
+        .count();
+    let with_rings: std::collections::HashSet<&str> = stopped
+        .iter()
+        .map(|o| o["best"].as_str().unwrap())
+        .collect();
+    assert_eq!(patterns_with_rings, with_rings.len());
+    // A dot per event and a ring per stopped onset, plus one of each per legend.
+    assert_eq!(
+        svg.matches("<circle").count(),
+        events.len() + 4 + stopped.len() + patterns_with_rings
+    );
 }
