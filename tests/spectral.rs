@@ -74,6 +74,16 @@ fn enrol(settings: &DetectorSettings) -> Vec<Pattern> {
 
 /// Other instances of the three sounds, gaps of `gaps` seconds, -9..0 dB, light noise.
 fn sequence(gaps: (f64, f64), seed: u64) -> (Vec<f32>, Vec<Annotation>, Vec<f32>) {
+    sequence_in_noise(gaps, (-9.0, 0.0), 0.0005, seed)
+}
+
+/// As [`sequence`], at gains of `gains_db` in noise of RMS `noise`.
+fn sequence_in_noise(
+    gaps: (f64, f64),
+    gains_db: (f64, f64),
+    noise: f64,
+    seed: u64,
+) -> (Vec<f32>, Vec<Annotation>, Vec<f32>) {
     let mut rng = Rng::new(seed);
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
@@ -81,7 +91,7 @@ fn sequence(gaps: (f64, f64), seed: u64) -> (Vec<f32>, Vec<Annotation>, Vec<f32>
     for i in 0..60u64 {
         let label = ["b", "ts", "k"][(rng.next_u64() % 3) as usize];
         let sound = maker(label)(100 + i);
-        let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
+        let gain = 10f32.powf(rng.range(gains_db.0, gains_db.1) as f32 / 20.0);
         truth.push(Annotation {
             onset: rec.len() as f64 / f64::from(RATE),
             label: label.into(),
@@ -91,7 +101,7 @@ fn sequence(gaps: (f64, f64), seed: u64) -> (Vec<f32>, Vec<Annotation>, Vec<f32>
         rec.extend(sound.iter().map(|v| v * gain));
         rec.extend(vec![0.0; samples_for(rng.range(gaps.0, gaps.1), RATE)]);
     }
-    add_noise(&mut rec, 0.0005, seed);
+    add_noise(&mut rec, noise, seed);
     (rec, truth, gains)
 }
 
@@ -637,5 +647,39 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
     );
     for (e, t) in events.iter().zip(&truth) {
         assert!((e.time - t.onset).abs() <= 0.005, "{e:?} for {t:?}");
+    }
+}
+
+/// Issue: onsets vanished in noise and in quick succession (30-120 ms gaps at -40 dB
+/// noise: onset F1 0.29). Here the hits, 18-24 dB under full scale (as quiet as real
+/// takes often are) with 30-120 ms between them, sit in noise 40 dB under full scale.
+#[test]
+#[ignore = "open: F1 0.66 (12 of 60 hits have no onset, 14 are stopped by the speech guard after a miss)"]
+fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
+    let settings = spectral();
+    // Enrolled at the level they are performed at.
+    let quiet = 10f32.powf(-21.0 / 20.0);
+    let patterns: Vec<Pattern> = ["b", "ts", "k"]
+        .iter()
+        .map(|l| {
+            let take = maker(l)(1).iter().map(|v| v * quiet).collect();
+            Pattern::from_samples(l, PatternKind::Impulse, vec![take], &settings).unwrap()
+        })
+        .collect();
+    for seed in [7, 8] {
+        let (rec, truth, _) = sequence_in_noise((0.03, 0.12), (-24.0, -18.0), 0.01, seed);
+        let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
+        det.enable_explain();
+        let events = detect_in_blocks(&mut det, &rec, 256);
+        let mut outcomes = std::collections::BTreeMap::new();
+        for r in det.take_explain().unwrap() {
+            *outcomes.entry(r.outcome.as_str()).or_insert(0) += 1;
+        }
+        let s = score(&events, &truth, 0.05);
+        assert!(
+            s.overall.f1 >= 0.95,
+            "seed {seed}: {}; onsets considered: {outcomes:?}",
+            onomato::eval::render_text(&s)
+        );
     }
 }
