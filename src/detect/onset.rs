@@ -30,8 +30,8 @@ pub struct OnsetParams {
     pub threshold_db: f32,
     /// The recent mean is taken over this long.
     pub mean_seconds: f64,
-    /// Two onsets are at least this far apart: about the shortest gap at which two
-    /// clicks are heard as two (Hirsh, 1959).
+    /// Two onsets are at least this far apart: about the shortest gap at which the
+    /// order of two sounds can be told (Hirsh, 1959).
     pub min_gap_seconds: f64,
     /// A band's noise floor rises at most this fast, dB per second: a room's noise
     /// changes over seconds, a sound's tail falls faster, and a burst of any loudness
