@@ -683,3 +683,31 @@ fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
         );
     }
 }
+
+/// A live stream starts at another sample each time: a recording a few samples later
+/// gives its events as many samples later, with the same labels and strengths.
+#[test]
+fn a_stream_a_few_samples_later_gives_the_same_events_as_many_samples_later() {
+    let (rec, _, _) = sequence((0.03, 0.7), 5);
+    let settings = spectral();
+    let reference = detect(&settings, &rec, 256);
+    assert!(reference.len() > 50);
+    for shift in [1usize, 7, 13, 26, 45, 63] {
+        let mut later = vec![0.0f32; shift];
+        later.extend(&rec);
+        let events = detect(&settings, &later, 256);
+        assert_eq!(events.len(), reference.len(), "shift {shift}");
+        for (e, r) in events.iter().zip(&reference) {
+            assert_eq!(e.pattern, r.pattern, "shift {shift}: {e:?} / {r:?}");
+            let dt = e.time - r.time - shift as f64 / f64::from(RATE);
+            assert!(
+                dt.abs() < 0.5 / f64::from(RATE),
+                "shift {shift}: {e:?} / {r:?}"
+            );
+            assert!(
+                (e.strength / r.strength - 1.0).abs() < 1e-3,
+                "shift {shift}: {e:?} / {r:?}"
+            );
+        }
+    }
+}

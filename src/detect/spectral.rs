@@ -4,8 +4,10 @@
 //! Frames: 256-sample Hann windows every 64 samples (at 22.05 kHz: 11.6 ms every
 //! 2.9 ms), 32 mel bands from 80 Hz to 7 kHz, in dB, floored 60 dB below the loudest
 //! band. Onsets come from the onset stage ([`super::onset`]) on the same frames' band
-//! powers. A few frames later an onset is placed on the samples (first 1.5 ms block
-//! within 12 dB of the loudest), and must stand 10 dB out of the 40-10 ms before it (a
+//! powers. A few frames later an onset is placed on the samples (the first 1.5 ms
+//! window, sliding a sample at a time, within 12 dB of the loudest: a signal a few
+//! samples later gives an onset as many samples later and the same strength, wherever
+//! the frames fall), and must stand 10 dB out of the 40-10 ms before it (a
 //! consonant inside speech follows a vowel). The gates compare the sound in a frame,
 //! its power less twice the room's noise (`sound_level_db`), so that noise just under a
 //! sound neither hides it nor passes for speech around it.
@@ -89,7 +91,7 @@ const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 /// frame (see [`OnsetParams`]).
 const FLOOR_RISE_DB_PER_S: f32 = 3.0;
 const FLOOR_FALL_DB_PER_S: f32 = 100.0;
-const REFINE_BLOCK_SECONDS: f64 = 0.0015;
+
 /// An onset is the first block within this many dB of the sound's loudest. On the real
 /// recordings of `examples/eval_beatbox.rs`, 12-16 dB places onsets best; 20-30 dB
 /// (which suits spoken words with a soft first consonant) falls into breath and room
@@ -856,33 +858,19 @@ impl SpectralMatcher {
     /// within `ONSET_RANGE_DB` of the loudest block up to now, and clearly above the
     /// noise floor.
     fn refine_onset(&self, c: u64) -> u64 {
-        let block = ((REFINE_BLOCK_SECONDS * self.rate) as u64).max(1);
+        let block = (self.hop() as u64 / 2).max(1);
         let lo = self.frame_start(c.saturating_sub(2)).max(0) as u64;
         let lo = lo.max(self.consumed.saturating_sub(self.samples.len() as u64));
-        let hi = self.consumed;
-        let energy = |s: u64| {
-            (s..s + block)
-                .map(|n| f64::from(self.sample(n)).powi(2))
-                .sum::<f64>()
-        };
-        let mut loudest = 0.0f64;
-        let mut s = lo;
-        while s + block <= hi {
-            loudest = loudest.max(energy(s));
-            s += block;
-        }
         let floor =
             block as f64 * 10f64.powf(f64::from(self.noise_floor_db + ONSET_ABOVE_FLOOR_DB) / 10.0);
-        let wanted = (loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0)).max(floor.min(loudest / 16.0));
-        let mut s = lo;
-        while s + block <= hi {
-            let e = energy(s);
-            if e >= wanted && e > 0.0 {
-                return s;
-            }
-            s += block;
-        }
-        lo
+        first_window_within(
+            lo,
+            self.consumed,
+            block,
+            |n| self.sample(n),
+            |loudest| (loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0)).max(floor.min(loudest / 16.0)),
+        )
+        .unwrap_or(lo)
     }
 
     fn decide_pending(&mut self, out: &mut Vec<Event>) {
@@ -1519,18 +1507,48 @@ const SOFT_ONSET_GAP_SECONDS: f64 = 0.01;
 /// loses exact copies: docs/onset-stage.md).
 const TAKE_ONSET_RANGE_DB: f32 = 40.0;
 
-/// First block of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `range_db` of
+/// First window of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `range_db` of
 /// the loudest block of the first 150 ms of `take`: its onset (`ONSET_RANGE_DB`), or
 /// its soft start (`SOFT_ONSET_RANGE_DB`).
 fn first_block_within(take: &[f32], hop: usize, range_db: f32) -> usize {
-    let head = &take[..take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize)];
-    let block = (hop / 2).max(1);
-    let mut energies = head
-        .chunks(block)
-        .map(|c| c.iter().map(|v| v * v).sum::<f32>());
-    let loudest = energies.clone().fold(0.0f32, f32::max);
-    let wanted = loudest * 10f32.powf(-range_db / 10.0);
-    energies
-        .position(|e| e >= wanted && e > 0.0)
-        .map_or(0, |i| i * block)
+    let head = take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize) as u64;
+    let block = (hop as u64 / 2).max(1);
+    let wanted = |loudest: f64| loudest * 10f64.powf(-f64::from(range_db) / 10.0);
+    first_window_within(0, head, block, |n| take[n as usize], wanted).map_or(0, |n| n as usize)
+}
+
+/// The first start `n` in `[from, to - block]` of a window of `block` samples whose
+/// energy reaches `wanted(loudest)`, `loudest` being the greatest such window's energy
+/// there. Windows slide a sample at a time, so a signal shifted by some samples gives
+/// an onset shifted by as many, whatever the frames' grid (`sample(n)` reads sample
+/// `n`; nothing is allocated).
+fn first_window_within(
+    from: u64,
+    to: u64,
+    block: u64,
+    sample: impl Fn(u64) -> f32,
+    wanted: impl Fn(f64) -> f64,
+) -> Option<u64> {
+    if to < from + block {
+        return None;
+    }
+    let power = |n: u64| f64::from(sample(n)).powi(2);
+    let mut energy: f64 = (from..from + block).map(power).sum();
+    let mut loudest = energy;
+    for n in from + block..to {
+        energy += power(n) - power(n - block);
+        loudest = loudest.max(energy);
+    }
+    let wanted = wanted(loudest);
+    let mut energy: f64 = (from..from + block).map(power).sum();
+    if energy >= wanted && energy > 0.0 {
+        return Some(from);
+    }
+    for n in from + block..to {
+        energy += power(n) - power(n - block);
+        if energy >= wanted && energy > 0.0 {
+            return Some(n + 1 - block);
+        }
+    }
+    None
 }
