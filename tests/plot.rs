@@ -19,7 +19,8 @@ fn texts(svg: &str) -> Vec<String> {
         .collect()
 }
 
-fn plot(dir: &std::path::Path, method: &str) -> (String, serde_json::Value) {
+/// Plots the example with `method` (and `extra` arguments); the SVG and the JSON.
+fn plot(dir: &std::path::Path, method: &str, extra: &[&str]) -> (String, serde_json::Value) {
     let svg = dir.join(format!("{method}.svg"));
     let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
         .args([
@@ -30,6 +31,7 @@ fn plot(dir: &std::path::Path, method: &str) -> (String, serde_json::Value) {
             "--method",
             method,
         ])
+        .args(extra)
         .arg("--plot")
         .arg(&svg)
         .current_dir(root())
@@ -56,7 +58,7 @@ fn plot(dir: &std::path::Path, method: &str) -> (String, serde_json::Value) {
 #[test]
 fn the_plot_shows_each_pattern_score_threshold_and_every_event() {
     let dir = common::temp_dir("plot");
-    let (svg, json) = plot(&dir, "waveform");
+    let (svg, json) = plot(&dir, "waveform", &[]);
     let t = texts(&svg);
     let events = json["events"].as_array().unwrap();
     let impulses = events.iter().filter(|e| e["kind"] == "impulse").count();
@@ -100,7 +102,7 @@ fn the_plot_shows_each_pattern_score_threshold_and_every_event() {
 #[test]
 fn the_spectral_plot_shows_the_score_of_each_decision_and_why_other_onsets_did_not_fire() {
     let dir = common::temp_dir("plot-spectral");
-    let (svg, json) = plot(&dir, "spectral");
+    let (svg, json) = plot(&dir, "spectral", &["--explain"]);
     let t = texts(&svg);
     let events = json["events"].as_array().unwrap();
     for name in ["tick", "pop", "boom", "hoo"] {
@@ -109,21 +111,9 @@ fn the_spectral_plot_shows_the_score_of_each_decision_and_why_other_onsets_did_n
             "{t:?}"
         );
     }
-    // Every onset that did not fire, as `--explain` lists it, is a ring under the
-    // pattern it resembled most, labelled with the gate that stopped it.
-    let out = Command::new(env!("CARGO_BIN_EXE_onomato"))
-        .args([
-            "analyze",
-            "examples/beat.wav",
-            "-c",
-            "config/onomato.toml",
-            "--explain",
-        ])
-        .current_dir(root())
-        .output()
-        .unwrap();
-    let explained: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let stopped: Vec<&serde_json::Value> = explained["onsets"]
+    // Every onset that did not fire, as `--explain` lists it in the same run, is a
+    // ring under the pattern it resembled most, labelled with the gate that stopped it.
+    let stopped: Vec<&serde_json::Value> = json["onsets"]
         .as_array()
         .unwrap()
         .iter()

@@ -106,10 +106,9 @@ pub struct OnsetDetector {
     rearm_after_frames: u64,
     /// Per band: the loudest floored log level since the last onset.
     peak: Vec<f32>,
-    /// The onset function at the last onset; `None` once its sound has faded.
+    /// The onset function at the last onset (where the current sound began); `None`
+    /// once its sound has faded.
     unarmed_rise: Option<f32>,
-    /// Frame of the last onset: where the current sound began.
-    sound_start: u64,
 }
 
 impl OnsetDetector {
@@ -134,7 +133,6 @@ impl OnsetDetector {
             rearm_after_frames: (params.rearm_after_seconds / hop_seconds) as u64,
             peak: vec![0.0; bands],
             unarmed_rise: None,
-            sound_start: 0,
             params,
         }
     }
@@ -184,8 +182,7 @@ impl OnsetDetector {
             return None;
         }
         let c = f - 1;
-        if let Some(rise) = self.unarmed_rise {
-            let start = self.sound_start;
+        if let (Some(rise), Some(start)) = (self.unarmed_rise, self.last_onset) {
             // The frame a window before the candidate: where an attack rises from.
             let g = c.saturating_sub(lag);
             let mut fall = 0.0f32;
@@ -239,7 +236,6 @@ impl OnsetDetector {
             self.unarmed_rise = None;
         }
         self.last_onset = Some(c);
-        self.sound_start = c;
         self.unarmed_rise = Some(value);
         let at_onset = row(c);
         self.peak
