@@ -9,7 +9,8 @@
 //! rises out of it moves by its signal-to-noise ratio; the rise is taken over the
 //! loudest of the band and its two neighbours one window earlier (a pitch gliding
 //! between bands, or a sound's own flutter, rises little); the function is the mean
-//! rise over bands, in dB. An onset is a local maximum of it that stands
+//! rise over bands, each weighed by how little its noise wanders ([`band_weights`]), in
+//! dB. An onset is a local maximum of it that stands
 //! `threshold_db` over its mean of the last `mean_seconds`, at least `min_gap_seconds`
 //! after the previous one, once the previous sound has fallen back (`rearm_fall`) or
 //! when it is far louder than that sound (`new_sound_db`).
@@ -57,7 +58,7 @@ pub struct OnsetParams {
 impl Default for OnsetParams {
     fn default() -> Self {
         Self {
-            floor_weight: 16.0,
+            floor_weight: 8.0,
             threshold_db: 1.0,
             mean_seconds: 0.1,
             min_gap_seconds: 0.02,
@@ -74,6 +75,20 @@ impl Default for OnsetParams {
 /// Band power below which a band is taken to hold nothing (-100 dB: below the noise
 /// of 16-bit audio).
 const MIN_BAND_POWER: f32 = 1e-10;
+
+/// Each band's weight in the onset function: the square root of the number of
+/// spectral values it sums (`band_bins`, the effective count of its filter's bins),
+/// over the mean of those roots. On steady noise a band's log level wanders by about
+/// 4.3 dB over the root of that count (the log of a mean of that many exponential
+/// powers), so a narrow low band that covers one bin wanders several times as far as a
+/// wide high one. Weighed so, every band's rise counts in units of its own noise's
+/// spread, and a hiss that lifts only the wide high bands is not averaged away by the
+/// wandering of the narrow low ones.
+pub fn band_weights(band_bins: &[f32]) -> Vec<f32> {
+    let roots: Vec<f32> = band_bins.iter().map(|&n| n.max(1.0).sqrt()).collect();
+    let mean = roots.iter().sum::<f32>() / roots.len().max(1) as f32;
+    roots.iter().map(|r| r / mean).collect()
+}
 
 /// An onset found by [`OnsetDetector::push`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,6 +108,8 @@ pub struct OnsetDetector {
     lag: usize,
     mean_frames: usize,
     min_gap_frames: u64,
+    /// Per band: the weight of its rise in the onset function (see [`band_weights`]).
+    weight: Vec<f32>,
     floor_rise: f32,
     floor_fall: f32,
     /// Per band: the noise floor (linear power).
@@ -114,7 +131,8 @@ pub struct OnsetDetector {
 impl OnsetDetector {
     /// For frames of `bands` band powers, `win` samples long every `hop` samples, at
     /// `rate` Hz.
-    pub fn new(params: OnsetParams, bands: usize, win: usize, hop: usize, rate: f64) -> Self {
+    pub fn new(params: OnsetParams, band_bins: &[f32], win: usize, hop: usize, rate: f64) -> Self {
+        let bands = band_bins.len();
         let hop_seconds = hop as f64 / rate;
         let lag = win.div_ceil(hop).max(1);
         let mean_frames = ((params.mean_seconds / hop_seconds) as usize).max(1);
@@ -123,6 +141,7 @@ impl OnsetDetector {
             lag,
             mean_frames,
             min_gap_frames: (params.min_gap_seconds / hop_seconds) as u64,
+            weight: band_weights(band_bins),
             floor_rise: 10f32.powf(params.floor_rise_db_per_s * hop_seconds as f32 / 10.0),
             floor_fall: 10f32.powf(-params.floor_fall_db_per_s * hop_seconds as f32 / 10.0),
             floor: vec![0.0; bands],
@@ -169,7 +188,7 @@ impl OnsetDetector {
                 let reference = self.history[before + lo..=before + hi]
                     .iter()
                     .fold(f32::NEG_INFINITY, |m, &x| m.max(x));
-                rise += (self.history[now + b] - reference).max(0.0);
+                rise += self.weight[b] * (self.history[now + b] - reference).max(0.0);
             }
             rise / bands as f32
         } else {
@@ -274,7 +293,7 @@ mod tests {
     }
 
     fn onsets(signal: &[f32]) -> Vec<f64> {
-        let mut d = OnsetDetector::new(OnsetParams::default(), BANDS, WIN, HOP, RATE);
+        let mut d = OnsetDetector::new(OnsetParams::default(), &[1.0; BANDS], WIN, HOP, RATE);
         let mut found = Vec::new();
         let mut start = 0;
         while start + WIN <= signal.len() {

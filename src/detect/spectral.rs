@@ -234,6 +234,19 @@ impl Analyzer {
         }
     }
 
+    /// Per band: the effective number of spectral bins its filter sums, (sum w)^2 /
+    /// sum w^2 for its weights w.
+    fn band_bins(&self) -> Vec<f32> {
+        self.bands
+            .iter()
+            .map(|b| {
+                let sum: f32 = b.weights.iter().sum();
+                let squares: f32 = b.weights.iter().map(|w| w * w).sum();
+                sum * sum / squares.max(1e-12)
+            })
+            .collect()
+    }
+
     /// Log-mel frame (dB) of `samples` (`win` long) into `out`; returns the frame's
     /// level in dB (mean power).
     fn frame(&mut self, samples: &[f32], out: &mut [f32]) -> f32 {
@@ -270,7 +283,7 @@ impl Analyzer {
 pub fn onset_times(samples: &[f32], rate: f64, params: OnsetParams) -> Vec<f64> {
     let mut analyzer = Analyzer::new(rate);
     let (win, hop) = (analyzer.win, analyzer.hop);
-    let mut onsets = OnsetDetector::new(params, BANDS, win, hop, rate);
+    let mut onsets = OnsetDetector::new(params, &analyzer.band_bins(), win, hop, rate);
     let mut frame = vec![0.0f32; BANDS];
     let mut found = Vec::new();
     let mut start = 0;
@@ -673,7 +686,13 @@ impl SpectralMatcher {
             levels: vec![SILENT_DB; frame_capacity],
             frame_capacity,
             frame_count: 0,
-            onsets: OnsetDetector::new(OnsetParams::default(), BANDS, win, analyzer.hop, rate),
+            onsets: OnsetDetector::new(
+                OnsetParams::default(),
+                &analyzer.band_bins(),
+                win,
+                analyzer.hop,
+                rate,
+            ),
             noise_floor_db: 0.0,
             pending: Vec::with_capacity(16),
             held: None,
