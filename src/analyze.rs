@@ -163,25 +163,27 @@ pub fn write_json(
 }
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most
-/// with their scores, its strength, and what became of it (`--explain`, on stderr).
+/// with their scores, its strength, the nearest background sound's score, and what
+/// became of it (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  outcome",
-        "onset s", "best", "score", "second", "score", "strength"
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  outcome",
+        "onset s", "best", "score", "second", "score", "strength", "speech"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {}",
             r.time,
             name(&r.best),
             num(r.best_score),
             name(&r.second),
             num(r.second_score),
             num(r.strength),
+            num(r.background_score),
             r.outcome.as_str()
         )?;
     }

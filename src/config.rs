@@ -242,7 +242,7 @@ impl Default for DetectorSettings {
             max_pattern_seconds: 5.0,
             channel: None,
             decision_seconds: 0.025,
-            speech_guard_seconds: 0.5,
+            speech_guard_seconds: 0.25,
             min_strength: 0.06,
         }
     }

@@ -215,15 +215,16 @@ fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
         guarded <= 3.0,
         "{guarded:.1} false events per minute of speech: {events:#?}"
     );
-    // The guard is what keeps speech out: without it, the same voice's consonants
-    // pass for its words.
-    let (unguarded, _) = per_minute(&DetectorSettings {
+    // Not only the guard: the background of other voices' speech keeps this voice's
+    // consonants from passing for its words without it too (before the background,
+    // 20 or more a minute passed with the guard off).
+    let (unguarded, events) = per_minute(&DetectorSettings {
         speech_guard_seconds: 0.0,
         ..settings.clone()
     });
     assert!(
-        unguarded >= 20.0,
-        "{unguarded:.1} per minute without the guard"
+        unguarded <= 3.0,
+        "{unguarded:.1} per minute without the guard: {events:#?}"
     );
 
     // Words said alone, more slowly, at several levels, are found at their onsets.

@@ -54,6 +54,7 @@ use realfft::num_complex::Complex32;
 use realfft::{RealFftPlanner, RealToComplex};
 use serde::Serialize;
 
+use super::background::BackgroundModel;
 use super::onset::{OnsetDetector, OnsetParams};
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
@@ -310,6 +311,25 @@ fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
     }
 }
 
+/// The features of every onset in `samples` (at `settings.sample_rate`) that stands out
+/// of its quiet, as the matcher with `settings` pools them: a background model
+/// (`examples/background_model.rs`).
+pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> BackgroundModel {
+    let mut matcher = SpectralMatcher::new(Vec::new(), settings);
+    matcher.collected = Some(Vec::new());
+    let mut out = Vec::new();
+    matcher.push(samples, &mut out);
+    matcher.finish(&mut out);
+    let templates = matcher.collected.take().unwrap_or_default();
+    BackgroundModel::new(FEATURES, matcher.decision_frames, templates)
+}
+
+/// An onset is taken for speech when the background's nearest sound scores at least
+/// its best pattern's score plus this. The margin, and the speech guard's default
+/// length, are the pair chosen by the sweep over the development sets in
+/// `docs/background.md`.
+const BACKGROUND_MARGIN: f32 = 0.05;
+
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
 
@@ -483,6 +503,12 @@ pub struct SpectralMatcher {
     best_instance: Vec<f32>,
     /// Every onset decided and what became of it, when asked for (offline).
     explain: Option<Vec<OnsetRecord>>,
+    background: BackgroundModel,
+    /// The onset being classified: its best similarity with the background.
+    background_score: f32,
+    /// The features of every onset that stands out of its quiet, when building a
+    /// background model ([`background_model`]).
+    collected: Option<Vec<f32>>,
 }
 
 /// What became of an onset, and which stage decided it (`analyze --explain`).
@@ -503,6 +529,8 @@ pub enum Outcome {
     HeldContinues,
     /// Quieter than `min_strength` times the take.
     MinStrength,
+    /// Nearer to ordinary speech (the built-in background) than to its pattern.
+    Background,
 }
 
 impl Outcome {
@@ -515,6 +543,7 @@ impl Outcome {
             Outcome::BelowThreshold => "below_threshold",
             Outcome::HeldContinues => "held_continues",
             Outcome::MinStrength => "min_strength",
+            Outcome::Background => "background",
         }
     }
 }
@@ -539,6 +568,9 @@ pub struct OnsetRecord {
     /// Amplitude against the best pattern's take over the decision window.
     #[serde(serialize_with = "super::opt_ratio")]
     pub strength: Option<f64>,
+    /// The nearest background sound's score (none when the model is not used).
+    #[serde(serialize_with = "super::opt_ratio")]
+    pub background_score: Option<f64>,
     pub outcome: Outcome,
 }
 
@@ -720,6 +752,9 @@ impl SpectralMatcher {
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
+            background: BackgroundModel::builtin().for_matcher(FEATURES, decision_frames),
+            background_score: f32::NEG_INFINITY,
+            collected: None,
         }
     }
 
@@ -921,6 +956,15 @@ impl SpectralMatcher {
     }
 
     fn classify(&mut self, time_sample: u64, onset_frame: u64, out: &mut Vec<Event>) {
+        if self.collected.is_some() {
+            let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
+            if peak - pre >= PRE_QUIET_DB {
+                self.pool_instance(onset_frame);
+                if let Some(collected) = &mut self.collected {
+                    collected.extend_from_slice(&self.instance);
+                }
+            }
+        }
         if self.templates.is_empty() {
             return;
         }
@@ -936,19 +980,7 @@ impl SpectralMatcher {
             take: best_template,
             ..
         } = self.pattern_scores[pi];
-        // A vocal hit stands out of relative quiet; a consonant inside speech follows a
-        // vowel. Reject onsets whose last tens of milliseconds were nearly as loud.
-        // The frames considered are those whose whole window lies in the quiet span.
-        let cap = self.frame_capacity as u64;
-        let peak = (onset_frame..self.frame_count)
-            .map(|f| self.levels[(f % cap) as usize])
-            .fold(f32::NEG_INFINITY, f32::max);
-        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
-        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
-        let pre = self
-            .frames_inside(quiet_from, quiet_to)
-            .map(|f| self.levels[(f % cap) as usize])
-            .fold(f32::NEG_INFINITY, f32::max);
+        let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
         // Once per onset, so that the explanation has it too: a sum over the 25 ms
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
@@ -963,6 +995,8 @@ impl SpectralMatcher {
             Outcome::Continuation
         } else if best_score < threshold {
             Outcome::BelowThreshold
+        } else if self.background_score >= best_score + BACKGROUND_MARGIN {
+            Outcome::Background
         } else if self.held.is_some_and(|h| h.pattern == pi) {
             // A held sound of the same pattern continues: no chatter.
             Outcome::HeldContinues
@@ -988,6 +1022,8 @@ impl SpectralMatcher {
                 second: second.map(|s| name(s.0)),
                 second_score: second.map(|s| f64::from(s.1)),
                 strength: Some(strength),
+                background_score: (!self.background.is_empty())
+                    .then_some(f64::from(self.background_score)),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
@@ -1052,11 +1088,31 @@ impl SpectralMatcher {
         out.push(decided);
     }
 
+    /// The loudest level (dB of sound) of the frames from `onset_frame`, and of the
+    /// frames before the onset at `time_sample` in the quiet-before span. A vocal hit
+    /// stands out of relative quiet; a consonant inside speech follows a vowel, so an
+    /// onset whose last tens of milliseconds were nearly as loud is rejected. The
+    /// frames before are those whose whole window lies in the span.
+    fn peak_and_before(&self, time_sample: u64, onset_frame: u64) -> (f32, f32) {
+        let cap = self.frame_capacity as u64;
+        let peak = (onset_frame..self.frame_count)
+            .map(|f| self.levels[(f % cap) as usize])
+            .fold(f32::NEG_INFINITY, f32::max);
+        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
+        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
+        let pre = self
+            .frames_inside(quiet_from, quiet_to)
+            .map(|f| self.levels[(f % cap) as usize])
+            .fold(f32::NEG_INFINITY, f32::max);
+        (peak, pre)
+    }
+
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
     /// tracked template, at each shift, into `pattern_scores`; keeps the features that
     /// scored best in `best_instance`.
     fn score_patterns(&mut self, onset_frame: u64) {
         self.pattern_scores.fill(PatternScore::NONE);
+        self.background_score = f32::NEG_INFINITY;
         let mut best = f32::NEG_INFINITY;
         for shift in 0..=2 * MAX_SHIFT {
             self.pool_instance((onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64));
@@ -1073,6 +1129,9 @@ impl SpectralMatcher {
                     self.best_instance.copy_from_slice(&self.instance);
                 }
             }
+            self.background_score = self
+                .background_score
+                .max(self.background.nearest(&self.instance));
             for (pi, s) in self.pattern_scores.iter_mut().enumerate() {
                 if !self.tracked_set[pi] {
                     continue;

@@ -1,0 +1,161 @@
+//! Background stage: how near an onset is to ordinary speech. Owns the built-in
+//! background model, the features of every onset that stands out of its own quiet in
+//! some minutes of speech by other synthetic voices, in English and three other
+//! languages (none of them a voice of the development sets). An onset nearer to one of
+//! them than to every take of its best pattern (by a margin) is taken for speech, not
+//! for the pattern. The model is fixed, so no decision of the detector can feed it.
+//!
+//! The model is made by `scripts/background-speech.sh` (espeak-ng and sox) and
+//! `cargo run --release --example background_model`, and embedded at build time. Its
+//! features are pooled over the decision window it was made with; a detector with
+//! another `decision_seconds` does not use it.
+//!
+//! Runs on the detector thread, inside the spectral matcher; parses the model in `new`
+//! and allocates nothing afterwards.
+
+/// The built-in model (see the module comment).
+const BUILTIN: &[u8] = include_bytes!("background.bin");
+
+/// Leading bytes of a model file.
+const MAGIC: &[u8; 4] = b"ONBG";
+
+/// Background feature vectors, all of one length and pooled over one number of frames.
+#[derive(Debug, Clone, Default)]
+pub struct BackgroundModel {
+    features: usize,
+    decision_frames: usize,
+    templates: Vec<f32>,
+}
+
+impl BackgroundModel {
+    /// The model embedded in the program.
+    pub fn builtin() -> Self {
+        // The embedded file is made by this module's own `to_bytes`; a file that does
+        // not parse is a build defect, caught by the tests.
+        Self::from_bytes(BUILTIN).unwrap_or_default()
+    }
+
+    /// `templates` are unit-norm vectors of `features` values each, pooled over
+    /// `decision_frames` frames.
+    pub fn new(features: usize, decision_frames: usize, templates: Vec<f32>) -> Self {
+        Self {
+            features,
+            decision_frames,
+            templates,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.templates.len() / self.features.max(1)
+    }
+
+    /// Values per template, and the frames they were pooled over.
+    pub fn shape(&self) -> (usize, usize) {
+        (self.features, self.decision_frames)
+    }
+
+    /// Every template's values, one after the other.
+    pub fn templates(&self) -> &[f32] {
+        &self.templates
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The model if it was pooled as a matcher with `features` values over
+    /// `decision_frames` frames pools; an empty one otherwise.
+    pub fn for_matcher(self, features: usize, decision_frames: usize) -> Self {
+        if self.features == features && self.decision_frames == decision_frames {
+            self
+        } else {
+            Self::default()
+        }
+    }
+
+    /// The best similarity (cosine) of `instance` with any template; minus infinity
+    /// for an empty model.
+    pub fn nearest(&self, instance: &[f32]) -> f32 {
+        self.templates
+            .chunks_exact(self.features.max(1))
+            .map(|t| t.iter().zip(instance).map(|(a, b)| a * b).sum::<f32>())
+            .fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    /// The file format: `ONBG`, then little-endian u32 features, decision frames and
+    /// count, then every value as i16 (times 32767; the vectors have unit norm).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(16 + 2 * self.templates.len());
+        out.extend_from_slice(MAGIC);
+        for n in [self.features, self.decision_frames, self.len()] {
+            out.extend_from_slice(&(n as u32).to_le_bytes());
+        }
+        for &x in &self.templates {
+            let q = (x.clamp(-1.0, 1.0) * 32767.0).round() as i16;
+            out.extend_from_slice(&q.to_le_bytes());
+        }
+        out
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        if bytes.len() < 16 || &bytes[..4] != MAGIC {
+            return Err("not a background model (no ONBG header)".into());
+        }
+        let word = |i: usize| {
+            u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]) as usize
+        };
+        let (features, decision_frames, count) = (word(4), word(8), word(12));
+        let values = features
+            .checked_mul(count)
+            .ok_or("background model: too many values")?;
+        let body = &bytes[16..];
+        if body.len() != 2 * values {
+            return Err(format!(
+                "background model: expected {values} values of 2 bytes, found {} bytes",
+                body.len()
+            ));
+        }
+        let templates = body
+            .chunks_exact(2)
+            .map(|c| f32::from(i16::from_le_bytes([c[0], c[1]])) / 32767.0)
+            .collect();
+        Ok(Self::new(features, decision_frames, templates))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_builtin_model_parses_and_is_not_empty() {
+        let parsed = BackgroundModel::from_bytes(BUILTIN).expect("the embedded model parses");
+        assert!(parsed.len() > 100, "{} templates", parsed.len());
+        assert!(parsed.features > 0 && parsed.decision_frames > 0);
+    }
+
+    #[test]
+    fn a_model_survives_its_file_format() {
+        let a = [0.6f32, 0.8, 0.0];
+        let b = [0.0f32, 0.0, 1.0];
+        let model = BackgroundModel::new(3, 5, [a, b].concat());
+        let back = BackgroundModel::from_bytes(&model.to_bytes()).unwrap();
+        assert_eq!((back.len(), back.features, back.decision_frames), (2, 3, 5));
+        assert!((back.nearest(&a) - 1.0).abs() < 1e-4);
+        assert!((back.nearest(&[0.0, 1.0, 0.0]) - 0.8).abs() < 1e-4);
+        let truncated = &model.to_bytes()[..20];
+        assert!(BackgroundModel::from_bytes(truncated).is_err());
+    }
+
+    #[test]
+    fn a_model_pooled_otherwise_is_not_used() {
+        let model = BackgroundModel::new(3, 5, vec![1.0, 0.0, 0.0]);
+        assert!(model.clone().for_matcher(3, 6).is_empty());
+        assert!(model.clone().for_matcher(4, 5).is_empty());
+        assert_eq!(model.for_matcher(3, 5).len(), 1);
+        assert_eq!(
+            BackgroundModel::default().nearest(&[1.0]),
+            f32::NEG_INFINITY
+        );
+    }
+}
