@@ -216,7 +216,8 @@ pub struct DetectorSettings {
     pub suppression_seconds: Option<f64>,
     /// Longest pattern take accepted.
     pub max_pattern_seconds: f64,
-    /// Spectral method: how long after an onset the sound is classified.
+    /// Spectral method: how long after an onset the sound is classified. The built-in
+    /// background of speech is pooled over the default; at another value it is not used.
     pub decision_seconds: f64,
     /// Spectral method: an onset is ignored when, this long before it, a sound that no
     /// pattern recognised (speech, music) held 60 ms within 10 dB of the new sound's
