@@ -1030,6 +1030,21 @@ impl SpectralMatcher {
                 records.push(record);
             }
         }
+        // A sound the guard stopped, but that the threshold and the background would
+        // have let through, is a pattern's sound too: it covers its span as a fired one
+        // does, so the guard never feeds on its own decisions (only sounds that are
+        // none of the patterns keep it closed).
+        if outcome == Outcome::SpeechGuard
+            && best_score >= threshold
+            && self.background_score < best_score + BACKGROUND_MARGIN
+        {
+            let len = self.templates[best_template].length_after_onset;
+            self.recognised[self.recognised_next] = (
+                time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
+                time_sample + len,
+            );
+            self.recognised_next = (self.recognised_next + 1) % RECOGNISED_SPANS;
+        }
         if outcome != Outcome::Fired {
             return;
         }
@@ -1273,8 +1288,9 @@ impl SpectralMatcher {
     /// `GUARD_SOUND_SECONDS` of frames within `GUARD_DB` of the new sound's `peak`
     /// (dB) that no recognised sound covers: the onset is then part of a longer
     /// unrecognised sound, such as a consonant inside speech. A frame is judged by the
-    /// sample at its centre; a recognised sound covers 10 ms before its onset to the end
-    /// of its take's length (a held one, to its end).
+    /// sample at its centre; a recognised sound (one that fired, or that only the guard
+    /// stopped) covers 10 ms before its onset to the end of its take's length (a held
+    /// one, to its end).
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
         let hop = self.hop() as u64;
