@@ -13,6 +13,8 @@
 //! Runs on the detector thread, inside the spectral matcher; parses the model in `new`
 //! and allocates nothing afterwards.
 
+use std::sync::{Arc, OnceLock};
+
 /// The built-in model (see the module comment).
 const BUILTIN: &[u8] = include_bytes!("background.bin");
 
@@ -24,15 +26,19 @@ const MAGIC: &[u8; 4] = b"ONBG";
 pub struct BackgroundModel {
     features: usize,
     decision_frames: usize,
-    templates: Vec<f32>,
+    /// Shared: every matcher (and every take's probe) holds the one built-in copy.
+    templates: Arc<[f32]>,
 }
 
 impl BackgroundModel {
-    /// The model embedded in the program.
+    /// The model embedded in the program, parsed once.
     pub fn builtin() -> Self {
+        static PARSED: OnceLock<BackgroundModel> = OnceLock::new();
         // The embedded file is made by this module's own `to_bytes`; a file that does
         // not parse is a build defect, caught by the tests.
-        Self::from_bytes(BUILTIN).unwrap_or_default()
+        PARSED
+            .get_or_init(|| Self::from_bytes(BUILTIN).unwrap_or_default())
+            .clone()
     }
 
     /// `templates` are unit-norm vectors of `features` values each, pooled over
@@ -41,7 +47,7 @@ impl BackgroundModel {
         Self {
             features,
             decision_frames,
-            templates,
+            templates: templates.into(),
         }
     }
 
@@ -90,7 +96,7 @@ impl BackgroundModel {
         for n in [self.features, self.decision_frames, self.len()] {
             out.extend_from_slice(&(n as u32).to_le_bytes());
         }
-        for &x in &self.templates {
+        for &x in self.templates.iter() {
             let q = (x.clamp(-1.0, 1.0) * 32767.0).round() as i16;
             out.extend_from_slice(&q.to_le_bytes());
         }
@@ -115,7 +121,7 @@ impl BackgroundModel {
                 body.len()
             ));
         }
-        let templates = body
+        let templates: Vec<f32> = body
             .chunks_exact(2)
             .map(|c| f32::from(i16::from_le_bytes([c[0], c[1]])) / 32767.0)
             .collect();

@@ -986,6 +986,8 @@ impl SpectralMatcher {
         let early = self.decision_window_energy(time_sample);
         let strength = (early / self.templates[best_template].early_energy.max(1e-12)).sqrt();
         let threshold = self.patterns[pi].threshold;
+        let below_threshold = best_score < threshold;
+        let like_speech = self.background_score >= best_score + BACKGROUND_MARGIN;
         // The gates, in order; the first that stops the sound names the outcome.
         let outcome = if peak - pre < PRE_QUIET_DB {
             Outcome::QuietBefore
@@ -993,9 +995,9 @@ impl SpectralMatcher {
             Outcome::SpeechGuard
         } else if self.continues_last_impulse(time_sample, onset_frame) {
             Outcome::Continuation
-        } else if best_score < threshold {
+        } else if below_threshold {
             Outcome::BelowThreshold
-        } else if self.background_score >= best_score + BACKGROUND_MARGIN {
+        } else if like_speech {
             Outcome::Background
         } else if self.held.is_some_and(|h| h.pattern == pi) {
             // A held sound of the same pattern continues: no chatter.
@@ -1034,21 +1036,16 @@ impl SpectralMatcher {
         // have let through, is a pattern's sound too: it covers its span as a fired one
         // does, so the guard never feeds on its own decisions (only sounds that are
         // none of the patterns keep it closed).
-        if outcome == Outcome::SpeechGuard
-            && best_score >= threshold
-            && self.background_score < best_score + BACKGROUND_MARGIN
-        {
-            let len = self.templates[best_template].length_after_onset;
-            self.recognised[self.recognised_next] = (
-                time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
-                time_sample + len,
+        if outcome == Outcome::SpeechGuard && !below_threshold && !like_speech {
+            self.cover(
+                time_sample,
+                time_sample + self.templates[best_template].length_after_onset,
             );
-            self.recognised_next = (self.recognised_next + 1) % RECOGNISED_SPANS;
         }
         if outcome != Outcome::Fired {
             return;
         }
-        let template = &self.templates[best_template];
+        let take_length = self.templates[best_template].length_after_onset;
         let info = &self.patterns[pi];
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
@@ -1066,18 +1063,15 @@ impl SpectralMatcher {
         let span_end = if info.kind == PatternKind::Continuous {
             u64::MAX
         } else {
-            time_sample + template.length_after_onset
+            time_sample + take_length
         };
-        self.recognised[self.recognised_next] = (
-            time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
-            span_end,
-        );
+        let slot = self.cover(time_sample, span_end);
+        let info = &self.patterns[pi];
         self.extending = (info.kind == PatternKind::Impulse).then_some(ExtendingSpan {
-            slot: self.recognised_next,
+            slot,
             peak_db: peak,
-            limit: time_sample + SPAN_STRETCH * template.length_after_onset,
+            limit: time_sample + SPAN_STRETCH * take_length,
         });
-        self.recognised_next = (self.recognised_next + 1) % RECOGNISED_SPANS;
         self.last_impulse = (info.kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
             onset_frame,
@@ -1101,6 +1095,18 @@ impl SpectralMatcher {
             self.track(pi);
         }
         out.push(decided);
+    }
+
+    /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
+    /// guard (from 10 ms before the onset, as the guard looks); returns its slot.
+    fn cover(&mut self, time_sample: u64, end: u64) -> usize {
+        let slot = self.recognised_next;
+        self.recognised[slot] = (
+            time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
+            end,
+        );
+        self.recognised_next = (slot + 1) % RECOGNISED_SPANS;
+        slot
     }
 
     /// The loudest level (dB of sound) of the frames from `onset_frame`, and of the
