@@ -168,15 +168,15 @@ pub fn write_json(
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  outcome",
-        "onset s", "best", "score", "second", "score", "strength", "speech"
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  outcome",
+        "onset s", "best", "score", "second", "score", "strength", "speech", "rise dB"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -184,6 +184,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             num(r.second_score),
             num(r.strength),
             num(r.background_score),
+            r.rise_db.map_or("-".to_string(), |v| format!("{v:.1}")),
             r.outcome.as_str()
         )?;
     }

@@ -719,6 +719,14 @@ fn explain_lists_every_onset_with_what_became_of_it() {
     for o in onsets.iter().filter(|o| o["outcome"] != "fired") {
         assert!(named.contains(&o["outcome"].as_str().unwrap()), "{o}");
     }
+    // The rise above the quiet before the onset is what the first gate judged: under
+    // 10 dB for every onset it stopped, at least 10 dB for every other.
+    for o in onsets {
+        let rise = o["rise_db"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no rise_db: {o}"));
+        assert_eq!(o["outcome"] == "quiet_before", rise < 10.0, "{o}");
+    }
     // The same, as a table on stderr.
     let table = stderr(&out);
     assert!(table.contains("outcome"), "{table}");

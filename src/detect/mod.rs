@@ -115,6 +115,13 @@ pub(crate) fn opt_ratio<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S
     }
 }
 
+pub(crate) fn opt_db<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match x {
+        Some(v) => s.serialize_f64(round_to(*v, 2)),
+        None => s.serialize_none(),
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum DetectError {
     #[error("no patterns are configured: give --pattern NAME=FILE.wav or a config with [[pattern]] entries")]

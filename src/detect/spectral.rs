@@ -571,6 +571,10 @@ pub struct OnsetRecord {
     /// The nearest background sound's score (none when the model is not used).
     #[serde(serialize_with = "super::opt_ratio")]
     pub background_score: Option<f64>,
+    /// How far the sound's peak rose above the 10-40 ms before its onset, dB (the
+    /// quiet-before gate asks for 10).
+    #[serde(serialize_with = "super::opt_db")]
+    pub rise_db: Option<f64>,
     pub outcome: Outcome,
 }
 
@@ -1026,6 +1030,7 @@ impl SpectralMatcher {
                 strength: Some(strength),
                 background_score: (!self.background.is_empty())
                     .then_some(f64::from(self.background_score)),
+                rise_db: (peak - pre).is_finite().then_some(f64::from(peak - pre)),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
