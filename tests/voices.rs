@@ -302,7 +302,11 @@ fn a_word_said_0_6_s_after_speech_is_found() {
         method: Method::Spectral,
         ..DetectorSettings::default()
     };
-    let patterns = enrolled_words(&dir, &settings);
+    // Without "pew", whose first 25 ms are those of "pop" (see above).
+    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
+        .into_iter()
+        .filter(|p| &*p.name != "pew")
+        .collect();
     let speech = paragraph(&dir);
     // The paragraph's first sentence or so, cut where the voice is silent.
     let cut = {
@@ -334,4 +338,155 @@ fn a_word_said_0_6_s_after_speech_is_found() {
                 .collect::<Vec<_>>()
         );
     }
+}
+
+/// The detector's account of every onset it considered (`analyze --explain`'s table).
+fn explained(det: &mut Detector) -> String {
+    let mut table = Vec::new();
+    onomato::analyze::write_explain(&mut table, &det.take_explain().unwrap_or_default()).unwrap();
+    String::from_utf8(table).unwrap()
+}
+
+/// Matches `events` against `truth` (name, onset): one to one, same name, within 50 ms.
+/// Returns the F1 and a readable account of both.
+fn f1_against(events: &[onomato::Event], truth: &[(&str, f64)]) -> (f64, String) {
+    let mut used = vec![false; events.len()];
+    let mut matched = 0;
+    for (name, at) in truth {
+        let hit = events
+            .iter()
+            .enumerate()
+            .filter(|(i, e)| !used[*i] && &*e.pattern == *name && (e.time - at).abs() <= 0.05)
+            .min_by(|a, b| (a.1.time - at).abs().total_cmp(&(b.1.time - at).abs()));
+        if let Some((i, _)) = hit {
+            used[i] = true;
+            matched += 1;
+        }
+    }
+    let f1 = 2.0 * matched as f64 / (events.len() + truth.len()).max(1) as f64;
+    let account = format!(
+        "{matched} of {} found; truth {:?}; events {:?}",
+        truth.len(),
+        truth
+            .iter()
+            .map(|(n, t)| format!("{n} {t:.3}"))
+            .collect::<Vec<_>>(),
+        events
+            .iter()
+            .map(|e| format!("{} {:.3}", e.pattern, e.time))
+            .collect::<Vec<_>>()
+    );
+    (f1, account)
+}
+
+/// Issue: exact copies of the enrolled takes must always be found, whatever came before
+/// (the speech guard once stayed closed after one miss, and nothing after 2.8 s of an
+/// 8 s recording of copies was found). Copies of the takes ("tick", "pew", "boom") at
+/// -12..0 dB, 80-500 ms
+/// apart, in noise 50 dB below full scale; half-way, one copy 40 dB down, which
+/// `min_strength` stops by design. Every other copy is found with its label, and
+/// nothing else is.
+#[test]
+fn exact_copies_of_the_takes_are_all_found_at_any_gain_in_noise_even_after_a_miss() {
+    let dir = temp_dir("exact-copies");
+    let settings = DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    // "pop" and "pew" share their first 25 ms (see above): "pew" stays, as its soft
+    // start is what a stream places differently by the noise around it.
+    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
+        .into_iter()
+        .filter(|p| p.kind == PatternKind::Impulse && &*p.name != "pop")
+        .collect();
+    let mut rng = Rng::new(31);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for copy in 0..32 {
+        let p = &patterns[(rng.next_u64() % patterns.len() as u64) as usize];
+        let take = &p.takes[0].samples;
+        let missed = copy == 16;
+        let gain_db = if missed { -40.0 } else { rng.range(-12.0, 0.0) };
+        let gain = 10f32.powf(gain_db as f32 / 20.0);
+        if !missed {
+            truth.push((&*p.name, rec.len() as f64 / f64::from(RATE)));
+        }
+        rec.extend(take.iter().map(|v| v * gain));
+        rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
+    }
+    rec.extend(vec![0.0; samples_for(0.3, RATE)]);
+    add_noise(&mut rec, 10f64.powf(-50.0 / 20.0), 32);
+    let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let (f1, account) = f1_against(&events, &truth);
+    assert!(
+        f1 >= 0.999,
+        "F1 {f1:.3}: {account}\n{}",
+        explained(&mut det)
+    );
+}
+
+/// Issue: the paper's own use, words said on a melody's rhythm (its rain scene). The
+/// voice's "tick", "pop" and "boom" said quickly (espeak-ng at 300 words a minute) on
+/// quarter and eighth notes at 150 bpm, at -6..0 dB: at least 95% F1.
+#[test]
+#[ignore = "open: F1 0.94; of 26 words, 2 that follow a \"boom\" 0.2 s before are stopped by the quiet-before gate (they rise 5-6 dB out of its vowel, as a consonant in speech does), and a \"boom\" scores 0.84 against its take and 0.89 against the background of speech"]
+fn words_said_on_a_rhythm_at_150_bpm_are_each_found() {
+    let dir = temp_dir("rhythm");
+    let settings = DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
+        .into_iter()
+        .filter(|p| p.kind == PatternKind::Impulse && &*p.name != "pew")
+        .collect();
+    let names = ["tick", "pop", "boom"];
+    let quick: Vec<Vec<f32>> = names
+        .iter()
+        .map(|n| word(&dir, &format!("{n}-quick"), n, "300"))
+        .collect();
+    // Beats of a tune (1 a quarter note), twice over.
+    let beats = [
+        1.0, 0.5, 0.5, 1.0, 0.5, 0.5, 1.0, 1.0, 0.5, 0.5, 0.5, 0.5, 2.0,
+    ];
+    let beat_seconds = 60.0 / 150.0;
+    let mut rng = Rng::new(41);
+    let mut at = 0.5;
+    let mut placements = Vec::new();
+    for b in beats.iter().chain(&beats) {
+        let which = (rng.next_u64() % names.len() as u64) as usize;
+        placements.push((which, at, 10f32.powf(rng.range(-6.0, 0.0) as f32 / 20.0)));
+        at += b * beat_seconds;
+    }
+    let mut rec = vec![0.0f32; samples_for(at + 1.0, RATE)];
+    let mut truth = Vec::new();
+    for (which, at, gain) in placements {
+        place(&mut rec, &quick[which], samples_for(at, RATE), gain);
+        truth.push((names[which], at));
+    }
+    add_noise(&mut rec, 0.0005, 42);
+    let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let (f1, account) = f1_against(&events, &truth);
+    assert!(f1 >= 0.95, "F1 {f1:.3}: {account}\n{}", explained(&mut det));
+}
+
+/// Issue: "pew", whose attack is soft and voiced in some voices, was never found. Said
+/// alone three times at another speed and at several levels, with "pop" (the same
+/// burst, see above) not enrolled, it is found.
+#[test]
+fn a_soft_attack_pew_said_alone_is_found() {
+    let dir = temp_dir("pew");
+    let settings = DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
+        .into_iter()
+        .filter(|p| &*p.name != "pop")
+        .collect();
+    said_alone_are_found(&dir, &patterns, &settings, &["pew"], 7);
 }
