@@ -220,7 +220,7 @@ pub struct DetectorSettings {
     /// background of speech is pooled over the default; at another value it is not used.
     pub decision_seconds: f64,
     /// Spectral method: an onset is ignored when, this long before it, a sound that no
-    /// pattern recognised (speech, music) held 60 ms within 10 dB of the new sound's
+    /// pattern recognised (speech, music) held 200 ms within 10 dB of the new sound's
     /// peak. 0 turns the guard off.
     pub speech_guard_seconds: f64,
     /// Spectral method: a sound whose strength (amplitude against the enrolled take,
@@ -243,7 +243,7 @@ impl Default for DetectorSettings {
             max_pattern_seconds: 5.0,
             channel: None,
             decision_seconds: 0.025,
-            speech_guard_seconds: 0.25,
+            speech_guard_seconds: 0.65,
             min_strength: 0.06,
         }
     }
