@@ -10,6 +10,7 @@
 
 pub mod background;
 mod envelope;
+mod features;
 pub mod onset;
 pub mod spectral;
 pub mod waveform;

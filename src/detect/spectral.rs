@@ -1,10 +1,8 @@
 //! The feature-domain matcher (`method = "spectral"`): short-time log-mel frames, onset
 //! detection, and a decision a few tens of milliseconds after each onset.
 //!
-//! Frames: 256-sample Hann windows every 64 samples (at 22.05 kHz: 11.6 ms every
-//! 2.9 ms), 32 mel bands from 80 Hz to 7 kHz, in dB, floored 60 dB below the loudest
-//! band. Onsets come from the onset stage ([`super::onset`]) on the same frames' band
-//! powers. A few frames later an onset is placed on the samples (the first 1.5 ms
+//! Frames and features come from the features stage ([`super::features`]), onsets
+//! from the onset stage ([`super::onset`]) on the same frames' band powers. A few frames later an onset is placed on the samples (the first 1.5 ms
 //! window, sliding a sample at a time, within 12 dB of the loudest: a signal a few
 //! samples later gives an onset as many samples later and the same strength, wherever
 //! the frames fall), and must stand 10 dB out of the 40-10 ms before it (a
@@ -20,10 +18,7 @@
 //! enrolled from both (`first_block_within`, `SOFT_ONSET_RANGE_DB`).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
-//! first one centred on it) are pooled into one mean power spectrum (so quiet frames
-//! before the attack weigh little), in dB, floored 50 dB below its loudest band, turned
-//! into cepstral coefficients weighted towards the finer shape of the spectrum
-//! (`LIFTER_POWER`; the mean level is dropped, so the level does not matter), and
+//! first one centred on it) are pooled into features ([`super::features`]) and
 //! compared by cosine with the same of every enrolment take (an impulse pattern's
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), allowing a
 //! shift of ±1 frame. Each impulse pattern also has a tracked template that follows
@@ -52,27 +47,18 @@
 
 use std::sync::Arc;
 
-use realfft::num_complex::Complex32;
-use realfft::{RealFftPlanner, RealToComplex};
 use serde::Serialize;
 
 use super::background::BackgroundModel;
+use super::features::{
+    normalise, pool_features, scale_to_unit, similarity, Analyzer, BANDS, FEATURES, HOP_SECONDS,
+    WINDOW_SECONDS,
+};
 use super::onset::{OnsetDetector, OnsetParams};
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
 
-const WINDOW_SECONDS: f64 = 256.0 / 22_050.0;
-const HOP_SECONDS: f64 = 64.0 / 22_050.0;
-const BANDS: usize = 32;
-const LOW_HZ: f64 = 80.0;
-/// Top of the mel bands. Above about 7 kHz a band's level depends more on the chain
-/// (microphone, the resampler's anti-aliasing filter, noise) than on the sound: on the
-/// real recordings of `examples/eval_beatbox.rs`, bands up to 7 kHz classify best
-/// (isolated set F1 0.95 against 0.86 with bands up to 11 kHz).
-const HIGH_HZ: f64 = 7_000.0;
-/// Bands are floored this far below the frame's loudest band.
-const BAND_RANGE_DB: f32 = 60.0;
 /// The frames between these times before an onset must be `PRE_QUIET_DB` below the
 /// sound's peak.
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
@@ -110,11 +96,6 @@ const HOLD_GAP_SECONDS: f64 = 0.030;
 const HELD_MIN_SIMILARITY: f32 = 0.5;
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
-
-struct MelBand {
-    first_bin: usize,
-    weights: Vec<f32>,
-}
 
 struct Template {
     pattern: usize,
@@ -162,126 +143,6 @@ struct Held {
     loudest_db: f32,
     last_good_frame: u64,
     score: f32,
-}
-
-/// Log-mel analysis shared by the matcher and the templates.
-struct Analyzer {
-    win: usize,
-    hop: usize,
-    fft: Arc<dyn RealToComplex<f32>>,
-    window: Vec<f32>,
-    fft_in: Vec<f32>,
-    spectrum: Vec<Complex32>,
-    scratch: Vec<Complex32>,
-    bands: Vec<MelBand>,
-    /// See [`cepstrum_basis`].
-    cepstrum: Vec<f32>,
-    /// The last frame's band powers (linear), for the onset stage.
-    power: Vec<f32>,
-}
-
-impl Analyzer {
-    fn new(rate: f64) -> Self {
-        let win = ((WINDOW_SECONDS * rate).round() as usize).max(32);
-        let hop = ((HOP_SECONDS * rate).round() as usize).max(1);
-        let fft = RealFftPlanner::<f32>::new().plan_fft_forward(win);
-        let window = (0..win)
-            .map(|i| {
-                let x = std::f64::consts::PI * 2.0 * i as f64 / win as f64;
-                (0.5 - 0.5 * x.cos()) as f32
-            })
-            .collect();
-        let bins = win / 2 + 1;
-        let mel = |hz: f64| 2595.0 * (1.0 + hz / 700.0).log10();
-        let hz = |m: f64| 700.0 * (10f64.powf(m / 2595.0) - 1.0);
-        let high = HIGH_HZ.min(rate / 2.0);
-        let (m0, m1) = (mel(LOW_HZ), mel(high));
-        let edges: Vec<f64> = (0..BANDS + 2)
-            .map(|i| hz(m0 + (m1 - m0) * i as f64 / (BANDS + 1) as f64))
-            .collect();
-        let bin_hz = rate / win as f64;
-        let bands = (0..BANDS)
-            .map(|b| {
-                let (lo, mid, hi) = (edges[b], edges[b + 1], edges[b + 2]);
-                let first = ((lo / bin_hz).floor() as usize).min(bins - 1);
-                let last = ((hi / bin_hz).ceil() as usize).min(bins - 1);
-                let mut weights: Vec<f32> = (first..=last)
-                    .map(|k| {
-                        let f = k as f64 * bin_hz;
-                        let w = if f <= mid {
-                            (f - lo) / (mid - lo)
-                        } else {
-                            (hi - f) / (hi - mid)
-                        };
-                        w.max(0.0) as f32
-                    })
-                    .collect();
-                // Narrow low bands may fall between bins: give them their nearest bin.
-                if weights.iter().all(|&w| w == 0.0) {
-                    let nearest = ((mid / bin_hz).round() as usize).clamp(first, last);
-                    weights[nearest - first] = 1.0;
-                }
-                MelBand {
-                    first_bin: first,
-                    weights,
-                }
-            })
-            .collect();
-        Self {
-            win,
-            hop,
-            fft_in: fft.make_input_vec(),
-            spectrum: fft.make_output_vec(),
-            scratch: fft.make_scratch_vec(),
-            fft,
-            window,
-            bands,
-            cepstrum: cepstrum_basis(),
-            power: vec![0.0; BANDS],
-        }
-    }
-
-    /// Per band: the effective number of spectral bins its filter sums, (sum w)^2 /
-    /// sum w^2 for its weights w.
-    fn band_bins(&self) -> Vec<f32> {
-        self.bands
-            .iter()
-            .map(|b| {
-                let sum: f32 = b.weights.iter().sum();
-                let squares: f32 = b.weights.iter().map(|w| w * w).sum();
-                sum * sum / squares.max(1e-12)
-            })
-            .collect()
-    }
-
-    /// Log-mel frame (dB) of `samples` (`win` long) into `out`; returns the frame's
-    /// level in dB (mean power).
-    fn frame(&mut self, samples: &[f32], out: &mut [f32]) -> f32 {
-        let mut power = 0.0f64;
-        for ((d, &x), &w) in self.fft_in.iter_mut().zip(samples).zip(&self.window) {
-            *d = x * w;
-            power += f64::from(x) * f64::from(x);
-        }
-        let _ =
-            self.fft
-                .process_with_scratch(&mut self.fft_in, &mut self.spectrum, &mut self.scratch);
-        let mut loudest = f32::NEG_INFINITY;
-        for ((band, o), p) in self.bands.iter().zip(out.iter_mut()).zip(&mut self.power) {
-            let e: f32 = band
-                .weights
-                .iter()
-                .zip(&self.spectrum[band.first_bin..])
-                .map(|(w, c)| w * c.norm_sqr())
-                .sum();
-            *p = e;
-            *o = 10.0 * (e + 1e-12).log10();
-            loudest = loudest.max(*o);
-        }
-        for o in out.iter_mut() {
-            *o = o.max(loudest - BAND_RANGE_DB);
-        }
-        10.0 * ((power / samples.len() as f64) + 1e-12).log10() as f32
-    }
 }
 
 /// Onset times (seconds, each at the centre of the frame where the onset function
@@ -339,64 +200,6 @@ const BACKGROUND_MARGIN: f32 = 0.05;
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
 
-/// Pooled bands are floored this far below the loudest pooled band.
-const POOLED_RANGE_DB: f32 = 50.0;
-/// Length of a feature vector: the cepstral coefficients of the pooled spectrum (the
-/// first, its mean level, always 0).
-const FEATURES: usize = BANDS;
-/// Cepstral coefficient k is weighted by k to this power before the comparison. At 0
-/// the similarity is the Pearson correlation of the pooled dB spectra, which the broad
-/// tilt of a spectrum (more bass or more hiss) dominates; a higher power weighs the
-/// finer shape (where the resonances of the mouth lie), which tells look-alike hits
-/// apart. On the real recordings of `examples/eval_beatbox.rs` (threshold 0.3, with
-/// tracking), F1 of rec6 / the repeated set: 0.43 / 0.84 at 0, 0.50 / 0.88 at 0.3,
-/// 0.71 / 0.93 at 0.5, 0.64 / 0.91 at 0.7 (rec3 falls from 0.94 to 0.88), 0.64 / 0.62
-/// at 1. Scores are lower than plain correlations: hence the method's threshold.
-const LIFTER_POWER: f32 = 0.5;
-
-/// The DCT-II rows that turn a pooled dB spectrum into weighted cepstral coefficients
-/// (`FEATURES` rows of `BANDS`; row 0, the mean level, is zero).
-fn cepstrum_basis() -> Vec<f32> {
-    let mut basis = vec![0.0f32; FEATURES * BANDS];
-    for k in 1..FEATURES {
-        let weight = (k as f32).powf(LIFTER_POWER);
-        for i in 0..BANDS {
-            let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / BANDS as f64;
-            basis[k * BANDS + i] = weight * angle.cos() as f32;
-        }
-    }
-    basis
-}
-
-/// Pools `k` consecutive frames (each `BANDS` dB values, from `frame(i)`) into one mean
-/// power spectrum (in dB), floors it, and turns it into weighted cepstral coefficients
-/// of unit norm (`basis` from [`cepstrum_basis`]). Averaging powers rather than dB
-/// lets the loud frames of the attack lead: on the real recordings of
-/// `examples/eval_beatbox.rs` (with plain correlations, before `LIFTER_POWER`) it
-/// raised the F1 of rec6 from 0.39 to 0.43 and of the repeated set from 0.66 to 0.71
-/// (isolated, rec3 unchanged). One spectrum over the
-/// whole window scored best: finer time detail (2 or 3 sub-windows) follows the
-/// articulation of one take too closely.
-fn pool_features<'a>(k: usize, frame: impl Fn(usize) -> &'a [f32], basis: &[f32], out: &mut [f32]) {
-    let mut pooled = [0.0f32; BANDS];
-    for i in 0..k {
-        for (d, x) in pooled.iter_mut().zip(frame(i)) {
-            *d += 10f32.powf(x / 10.0);
-        }
-    }
-    for d in pooled.iter_mut() {
-        *d = 10.0 * (*d / k.max(1) as f32 + 1e-12).log10();
-    }
-    let loudest = pooled.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
-    for x in pooled.iter_mut() {
-        *x = x.max(loudest - POOLED_RANGE_DB);
-    }
-    for (c, row) in out.iter_mut().zip(basis.chunks_exact(BANDS)) {
-        *c = row.iter().zip(&pooled).map(|(w, x)| w * x).sum();
-    }
-    scale_to_unit(out);
-}
-
 /// An impulse pattern's takes are each moved this many times their pattern's mean
 /// towards it (and scaled back to unit norm): two thirds of the way. A sound is scored
 /// by its best take, so a pattern of several takes that differ reaches further, and
@@ -442,26 +245,6 @@ fn shrink_takes_towards_their_mean(templates: &mut [Template], patterns: &[Patte
             scale_to_unit(&mut t.features);
         }
     }
-}
-
-/// Scales `v` to unit norm (in place); a zero vector stays zero.
-fn scale_to_unit(v: &mut [f32]) {
-    let norm = v.iter().map(|x| x * x).sum::<f32>().sqrt();
-    for x in v.iter_mut() {
-        *x = if norm > 1e-9 { *x / norm } else { 0.0 };
-    }
-}
-
-/// Similarity of two unit-norm feature vectors (the cosine of their angle).
-fn similarity(a: &[f32], b: &[f32]) -> f32 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Centres `v` and scales it to unit norm (in place); a flat vector becomes zeros.
-fn normalise(v: &mut [f32]) {
-    let mean = v.iter().sum::<f32>() / v.len().max(1) as f32;
-    v.iter_mut().for_each(|x| *x -= mean);
-    scale_to_unit(v);
 }
 
 /// Streaming spectral matcher.
