@@ -11,6 +11,7 @@
 pub mod background;
 mod envelope;
 mod features;
+pub mod gates;
 pub mod onset;
 pub mod spectral;
 pub mod waveform;
@@ -22,7 +23,8 @@ use serde::{Serialize, Serializer};
 use crate::audio::{AudioError, StreamResampler};
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
-pub use spectral::{OnsetRecord, Outcome, SpectralMatcher};
+pub use gates::Outcome;
+pub use spectral::{OnsetRecord, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
 /// The matcher a detector runs.

@@ -2,12 +2,14 @@
 //! detection, and a decision a few tens of milliseconds after each onset.
 //!
 //! Frames and features come from the features stage ([`super::features`]), onsets
-//! from the onset stage ([`super::onset`]) on the same frames' band powers. A few frames later an onset is placed on the samples (the first 1.5 ms
-//! window, sliding a sample at a time, within 12 dB of the loudest: a signal a few
-//! samples later gives an onset as many samples later and the same strength, wherever
-//! the frames fall), and must stand 10 dB out of the 40-10 ms before it (a
-//! consonant inside speech follows a vowel). The gates compare the sound in a frame,
-//! its power less twice the room's noise (`sound_level_db`), so that noise just under a
+//! from the onset stage ([`super::onset`]) on the same frames' band powers. A few
+//! frames later an onset is placed on the samples (the first 1.5 ms window, sliding a
+//! sample at a time, within 12 dB of the loudest: a signal a few samples later gives an
+//! onset as many samples later and the same strength, wherever the frames fall). The
+//! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
+//! here: it must stand 10 dB out of the 40-10 ms before it (a consonant inside speech
+//! follows a vowel), and so on. The levels they compare are the sound in a frame, its
+//! power less twice the room's noise (`sound_level_db`), so that noise just under a
 //! sound neither hides it nor passes for speech around it.
 //! An enrolled take's onset is placed by the same stages, the take streamed after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
@@ -54,16 +56,16 @@ use super::features::{
     normalise, pool_features, scale_to_unit, similarity, Analyzer, BANDS, FEATURES, HOP_SECONDS,
     WINDOW_SECONDS,
 };
+use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::onset::{OnsetDetector, OnsetParams};
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
 
-/// The frames between these times before an onset must be `PRE_QUIET_DB` below the
-/// sound's peak.
+/// The frames between these times before an onset are the quiet it must rise out of
+/// (`GateParams::pre_quiet_db`).
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.010;
-const PRE_QUIET_DB: f32 = 10.0;
 const PITCH_MIN_HZ: f64 = 60.0;
 const PITCH_MAX_HZ: f64 = 500.0;
 const PITCH_WINDOW_SECONDS: f64 = 0.1;
@@ -194,9 +196,6 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
 /// An onset is taken for speech when the background's nearest sound scores at least
 /// its best pattern's score plus this. The margin, and the speech guard's default
 /// length, are the pair chosen by the sweep over the development sets in
-/// `docs/background.md`.
-const BACKGROUND_MARGIN: f32 = 0.05;
-
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
 
@@ -284,7 +283,7 @@ pub struct SpectralMatcher {
     /// The newest recognised impulse, whose span grows while its sound goes on.
     extending: Option<ExtendingSpan>,
     speech_guard_seconds: f64,
-    min_strength: f64,
+    gates: GateParams,
     /// The first onsets placed (samples), kept for [`take_onsets`]'s look at a take.
     placed: [u64; PLACED_KEPT],
     placed_count: usize,
@@ -306,43 +305,6 @@ pub struct SpectralMatcher {
     /// The features of every onset that stands out of its quiet, when building a
     /// background model ([`background_model`]).
     collected: Option<Vec<f32>>,
-}
-
-/// What became of an onset, and which stage decided it (`analyze --explain`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Outcome {
-    Fired,
-    /// The 10-40 ms before the onset were within 10 dB of its peak: it continues a
-    /// sound (a consonant after a vowel).
-    QuietBefore,
-    /// The speech guard: it follows unrecognised sound.
-    SpeechGuard,
-    /// The last impulse's own later sound (the closing "p" of a "pop").
-    Continuation,
-    /// No pattern scored its threshold: none of the patterns.
-    BelowThreshold,
-    /// A held sound of the same pattern goes on.
-    HeldContinues,
-    /// Quieter than `min_strength` times the take.
-    MinStrength,
-    /// Nearer to ordinary speech (the built-in background) than to its pattern.
-    Background,
-}
-
-impl Outcome {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Outcome::Fired => "fired",
-            Outcome::QuietBefore => "quiet_before",
-            Outcome::SpeechGuard => "speech_guard",
-            Outcome::Continuation => "continuation",
-            Outcome::BelowThreshold => "below_threshold",
-            Outcome::HeldContinues => "held_continues",
-            Outcome::MinStrength => "min_strength",
-            Outcome::Background => "background",
-        }
-    }
 }
 
 /// What became of one onset (`analyze --explain`).
@@ -557,7 +519,10 @@ impl SpectralMatcher {
             recognised_next: 0,
             extending: None,
             speech_guard_seconds: settings.speech_guard_seconds,
-            min_strength: settings.min_strength,
+            gates: GateParams {
+                min_strength: settings.min_strength,
+                ..GateParams::default()
+            },
             placed: [0; PLACED_KEPT],
             placed_count: 0,
             last_impulse: None,
@@ -772,7 +737,7 @@ impl SpectralMatcher {
     fn classify(&mut self, time_sample: u64, onset_frame: u64, out: &mut Vec<Event>) {
         if self.collected.is_some() {
             let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
-            if peak - pre >= PRE_QUIET_DB {
+            if peak - pre >= self.gates.pre_quiet_db {
                 self.pool_instance(onset_frame);
                 if let Some(collected) = &mut self.collected {
                     collected.extend_from_slice(&self.instance);
@@ -799,28 +764,17 @@ impl SpectralMatcher {
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
         let strength = (early / self.templates[best_template].early_energy.max(1e-12)).sqrt();
-        let threshold = self.patterns[pi].threshold;
-        let below_threshold = best_score < threshold;
-        let like_speech = self.background_score >= best_score + BACKGROUND_MARGIN;
-        // The gates, in order; the first that stops the sound names the outcome.
-        let outcome = if peak - pre < PRE_QUIET_DB {
-            Outcome::QuietBefore
-        } else if self.follows_unrecognised_sound(time_sample, peak) {
-            Outcome::SpeechGuard
-        } else if self.continues_last_impulse(time_sample, onset_frame) {
-            Outcome::Continuation
-        } else if below_threshold {
-            Outcome::BelowThreshold
-        } else if like_speech {
-            Outcome::Background
-        } else if self.held.is_some_and(|h| h.pattern == pi) {
-            // A held sound of the same pattern continues: no chatter.
-            Outcome::HeldContinues
-        } else if strength < self.min_strength {
-            Outcome::MinStrength
-        } else {
-            Outcome::Fired
+        let evidence = Evidence {
+            rise_db: peak - pre,
+            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
+            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+            best_score,
+            threshold: self.patterns[pi].threshold,
+            background_score: self.background_score,
+            held_by_best_pattern: self.held.is_some_and(|h| h.pattern == pi),
+            strength,
         };
+        let outcome = decide(&evidence, &self.gates);
         if self.explain.is_some() {
             let second = self
                 .pattern_scores
@@ -840,7 +794,10 @@ impl SpectralMatcher {
                 strength: Some(strength),
                 background_score: (!self.background.is_empty())
                     .then_some(f64::from(self.background_score)),
-                rise_db: (peak - pre).is_finite().then_some(f64::from(peak - pre)),
+                rise_db: evidence
+                    .rise_db
+                    .is_finite()
+                    .then_some(f64::from(evidence.rise_db)),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
@@ -851,7 +808,10 @@ impl SpectralMatcher {
         // have let through, is a pattern's sound too: it covers its span as a fired one
         // does, so the guard never feeds on its own decisions (only sounds that are
         // none of the patterns keep it closed).
-        if outcome == Outcome::SpeechGuard && !below_threshold && !like_speech {
+        if outcome == Outcome::SpeechGuard
+            && !evidence.below_threshold()
+            && !evidence.like_speech(&self.gates)
+        {
             self.cover(
                 time_sample,
                 time_sample + self.templates[best_template].length_after_onset,

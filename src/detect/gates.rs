@@ -1,0 +1,267 @@
+//! The gates stage: what becomes of a classified onset. Every onset the spectral
+//! matcher considers gets one [`Outcome`], decided here from the evidence the other
+//! stages gathered about it ([`Evidence`]), by the first gate in order that stops it;
+//! an onset no gate stops fires. A pure function, so each gate can be tested alone;
+//! runs on the detector thread.
+
+use serde::Serialize;
+
+/// What became of an onset, and which gate decided it (`analyze --explain`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    Fired,
+    /// The 10-40 ms before the onset were within `pre_quiet_db` of its peak: it
+    /// continues a sound (a consonant after a vowel).
+    QuietBefore,
+    /// The speech guard: it follows unrecognised sound.
+    SpeechGuard,
+    /// The last impulse's own later sound (the closing "p" of a "pop").
+    Continuation,
+    /// No pattern scored its threshold: none of the patterns.
+    BelowThreshold,
+    /// Nearer to ordinary speech (the built-in background) than to its pattern.
+    Background,
+    /// A held sound of the same pattern goes on.
+    HeldContinues,
+    /// Quieter than `min_strength` times the take.
+    MinStrength,
+}
+
+impl Outcome {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Fired => "fired",
+            Outcome::QuietBefore => "quiet_before",
+            Outcome::SpeechGuard => "speech_guard",
+            Outcome::Continuation => "continuation",
+            Outcome::BelowThreshold => "below_threshold",
+            Outcome::Background => "background",
+            Outcome::HeldContinues => "held_continues",
+            Outcome::MinStrength => "min_strength",
+        }
+    }
+}
+
+/// The gates' settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GateParams {
+    /// A sound must rise this far (dB) above the 10-40 ms before its onset.
+    pub pre_quiet_db: f32,
+    /// A sound whose nearest background sound scores this much more than its best
+    /// pattern is taken for speech (`docs/background.md`).
+    pub background_margin: f32,
+    /// Amplitude against the best pattern's take below which a sound is not the user's.
+    pub min_strength: f64,
+}
+
+impl Default for GateParams {
+    fn default() -> Self {
+        Self {
+            pre_quiet_db: 10.0,
+            background_margin: 0.05,
+            min_strength: 0.06,
+        }
+    }
+}
+
+/// What the stages found out about one onset.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evidence {
+    /// The sound's peak over the 10-40 ms before its onset, dB.
+    pub rise_db: f32,
+    /// The speech guard's span before the onset held enough unrecognised sound.
+    pub follows_unrecognised_sound: bool,
+    /// It is the last fired impulse's own later sound.
+    pub continues_last_impulse: bool,
+    /// The best pattern's score, and its threshold.
+    pub best_score: f32,
+    pub threshold: f32,
+    /// The nearest background sound's score (minus infinity without a background).
+    pub background_score: f32,
+    /// A held sound of the best pattern is going on.
+    pub held_by_best_pattern: bool,
+    /// Amplitude against the best pattern's take.
+    pub strength: f64,
+}
+
+impl Evidence {
+    /// No pattern scored its threshold.
+    pub fn below_threshold(&self) -> bool {
+        self.best_score < self.threshold
+    }
+
+    /// The background explains the sound better than its pattern.
+    pub fn like_speech(&self, params: &GateParams) -> bool {
+        self.background_score >= self.best_score + params.background_margin
+    }
+}
+
+/// The first gate, in order, that stops the onset; `Fired` when none does.
+pub fn decide(e: &Evidence, params: &GateParams) -> Outcome {
+    if e.rise_db < params.pre_quiet_db {
+        Outcome::QuietBefore
+    } else if e.follows_unrecognised_sound {
+        Outcome::SpeechGuard
+    } else if e.continues_last_impulse {
+        Outcome::Continuation
+    } else if e.below_threshold() {
+        Outcome::BelowThreshold
+    } else if e.like_speech(params) {
+        Outcome::Background
+    } else if e.held_by_best_pattern {
+        Outcome::HeldContinues
+    } else if e.strength < params.min_strength {
+        Outcome::MinStrength
+    } else {
+        Outcome::Fired
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An onset that every gate lets through.
+    fn clear() -> Evidence {
+        Evidence {
+            rise_db: 40.0,
+            follows_unrecognised_sound: false,
+            continues_last_impulse: false,
+            best_score: 0.8,
+            threshold: 0.3,
+            background_score: 0.5,
+            held_by_best_pattern: false,
+            strength: 1.0,
+        }
+    }
+
+    #[test]
+    fn an_onset_no_gate_stops_fires() {
+        assert_eq!(decide(&clear(), &GateParams::default()), Outcome::Fired);
+    }
+
+    #[test]
+    fn each_gate_stops_an_onset_by_its_own_evidence_and_names_itself() {
+        let p = GateParams::default();
+        let cases: [(Evidence, Outcome); 7] = [
+            (
+                Evidence {
+                    rise_db: 9.9,
+                    ..clear()
+                },
+                Outcome::QuietBefore,
+            ),
+            (
+                Evidence {
+                    follows_unrecognised_sound: true,
+                    ..clear()
+                },
+                Outcome::SpeechGuard,
+            ),
+            (
+                Evidence {
+                    continues_last_impulse: true,
+                    ..clear()
+                },
+                Outcome::Continuation,
+            ),
+            (
+                Evidence {
+                    best_score: 0.29,
+                    ..clear()
+                },
+                Outcome::BelowThreshold,
+            ),
+            (
+                Evidence {
+                    background_score: 0.85,
+                    ..clear()
+                },
+                Outcome::Background,
+            ),
+            (
+                Evidence {
+                    held_by_best_pattern: true,
+                    ..clear()
+                },
+                Outcome::HeldContinues,
+            ),
+            (
+                Evidence {
+                    strength: 0.05,
+                    ..clear()
+                },
+                Outcome::MinStrength,
+            ),
+        ];
+        for (e, expected) in cases {
+            assert_eq!(decide(&e, &p), expected, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn the_first_gate_in_order_names_the_outcome() {
+        let p = GateParams::default();
+        let everything = Evidence {
+            rise_db: 3.0,
+            follows_unrecognised_sound: true,
+            continues_last_impulse: true,
+            best_score: 0.1,
+            background_score: 0.9,
+            held_by_best_pattern: true,
+            strength: 0.0,
+            ..clear()
+        };
+        assert_eq!(decide(&everything, &p), Outcome::QuietBefore);
+        let after_quiet = Evidence {
+            rise_db: 40.0,
+            ..everything
+        };
+        assert_eq!(decide(&after_quiet, &p), Outcome::SpeechGuard);
+        let below = Evidence {
+            follows_unrecognised_sound: false,
+            continues_last_impulse: false,
+            ..after_quiet
+        };
+        assert_eq!(decide(&below, &p), Outcome::BelowThreshold);
+    }
+
+    #[test]
+    fn the_margins_are_the_params() {
+        let strict = GateParams {
+            pre_quiet_db: 20.0,
+            background_margin: 0.5,
+            min_strength: 0.0,
+        };
+        let e = Evidence {
+            rise_db: 15.0,
+            ..clear()
+        };
+        assert_eq!(decide(&e, &strict), Outcome::QuietBefore);
+        assert_eq!(decide(&e, &GateParams::default()), Outcome::Fired);
+        let near_speech = Evidence {
+            background_score: 0.9,
+            ..clear()
+        };
+        assert_eq!(
+            decide(&near_speech, &GateParams::default()),
+            Outcome::Background
+        );
+        assert_eq!(
+            decide(
+                &near_speech,
+                &GateParams {
+                    background_margin: 0.5,
+                    ..GateParams::default()
+                }
+            ),
+            Outcome::Fired
+        );
+        let faint = Evidence {
+            strength: 0.01,
+            ..clear()
+        };
+        assert_eq!(decide(&faint, &strict), Outcome::Fired);
+    }
+}
