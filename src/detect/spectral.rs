@@ -14,7 +14,7 @@
 //! An enrolled take's onset is placed by the same stages, the take streamed after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
 //! first consonant (the "p" of "pew") is found; an impulse whose two placements differ
-//! is enrolled from both (`take_onsets`).
+//! is enrolled from both ([`super::enrol`]).
 //! A held sound that swells (a breathy "h" before its vowel) is placed where the stream
 //! finds it when loud, on its soft start, and when soft, on its vowel: such a take is
 //! enrolled from both (`first_block_within`, `SOFT_ONSET_RANGE_DB`).
@@ -52,6 +52,10 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::background::BackgroundModel;
+use super::enrol::{
+    first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets, TakeFeatures,
+    Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+};
 use super::features::{
     normalise, pool_features, scale_to_unit, similarity, Analyzer, BANDS, FEATURES, HOP_SECONDS,
     WINDOW_SECONDS,
@@ -75,9 +79,9 @@ const VOICED_CORRELATION: f64 = 0.6;
 /// attack has arrived.
 const PLACE_AFTER_FRAMES: u64 = 3;
 /// Shift tolerance when comparing frames with a template.
-const MAX_SHIFT: usize = 1;
+pub(super) const MAX_SHIFT: usize = 1;
 /// An onset is placed on sound this far above the noise floor, dB.
-const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
+pub(super) const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 /// The noise floor rises this fast, dB per second, and falls this fast towards a quieter
 /// frame (see [`OnsetParams`]).
 const FLOOR_RISE_DB_PER_S: f32 = 3.0;
@@ -87,7 +91,7 @@ const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 /// recordings of `examples/eval_beatbox.rs`, 12-16 dB places onsets best; 20-30 dB
 /// (which suits spoken words with a soft first consonant) falls into breath and room
 /// noise before the hit and costs a third of the F1.
-const ONSET_RANGE_DB: f64 = 12.0;
+pub(super) const ONSET_RANGE_DB: f64 = 12.0;
 const HOLD_DROP_DB: f32 = 20.0;
 const HOLD_GAP_SECONDS: f64 = 0.030;
 /// A held sound's frames must resemble its pattern's sustained spectrum at least this
@@ -98,26 +102,6 @@ const HOLD_GAP_SECONDS: f64 = 0.030;
 const HELD_MIN_SIMILARITY: f32 = 0.5;
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
-
-struct Template {
-    pattern: usize,
-    /// Enrolled from a second placement of a take's onset (a quiet room's, or a held
-    /// sound's soft start): left out of `shrink_takes_towards_their_mean`, which is
-    /// for different takes.
-    second_placement: bool,
-    /// Centred, unit-norm features of the first frames after the take's onset.
-    features: Vec<f32>,
-    /// Energy of the take's samples over the decision window.
-    early_energy: f64,
-    /// Length of the take from its onset, samples: how long an instance is taken to
-    /// last when judging the context of the next onset.
-    length_after_onset: u64,
-    /// The take's own later sounds: features as `features`, and energy over the
-    /// decision window, from every frame after the onset frame (`[k - 1]`: k frames
-    /// after it) to the end of the take.
-    later_features: Vec<f32>,
-    later_energy: Vec<f64>,
-}
 
 struct PatternInfo {
     name: Arc<str>,
@@ -198,53 +182,6 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
 /// length, are the pair chosen by the sweep over the development sets in
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
-
-/// An impulse pattern's takes are each moved this many times their pattern's mean
-/// towards it (and scaled back to unit norm): two thirds of the way. A sound is scored
-/// by its best take, so a pattern of several takes that differ reaches further, and
-/// where patterns are alike it takes sounds from the others: on the repeated set of
-/// `examples/eval_beatbox.rs`, three takes of each sound scored 0.829 on the later
-/// repetitions against 0.902 for the first take alone. Moved towards their mean, three
-/// takes score 0.854 at 0.5, 0.878 at 1 and 0.902 from 1.5 to 6 (0.878 at 100, all
-/// but the mean); on the isolated set three takes score 1.000 at every setting, against
-/// 0.980 for one. A pattern enrolled two different ways is still found both ways: a
-/// take at right angles to the other keeps a similarity of 0.86 with itself at 2
-/// (`tests/spectral.rs` has such a pattern: F1 at least 0.95 at 2, 0.700 at 100).
-/// One take is its own mean, so a single-take pattern is unchanged.
-const TAKE_SHRINK: f32 = 2.0;
-
-/// Moves every impulse pattern's take features `TAKE_SHRINK` times their pattern's mean
-/// towards it. Held patterns are left as enrolled: a swelling take gives them two
-/// templates on purpose, its soft start and its full sound.
-fn shrink_takes_towards_their_mean(templates: &mut [Template], patterns: &[PatternInfo]) {
-    let mut mean = [0.0f32; FEATURES];
-    for (pi, info) in patterns.iter().enumerate() {
-        if info.kind != PatternKind::Impulse {
-            continue;
-        }
-        mean.fill(0.0);
-        let takes = || {
-            templates
-                .iter()
-                .filter(|t| t.pattern == pi && !t.second_placement)
-        };
-        for t in takes() {
-            for (m, x) in mean.iter_mut().zip(&t.features) {
-                *m += x;
-            }
-        }
-        scale_to_unit(&mut mean);
-        for t in templates
-            .iter_mut()
-            .filter(|t| t.pattern == pi && !t.second_placement)
-        {
-            for (x, m) in t.features.iter_mut().zip(&mean) {
-                *x += TAKE_SHRINK * m;
-            }
-            scale_to_unit(&mut t.features);
-        }
-    }
-}
 
 /// Streaming spectral matcher.
 pub struct SpectralMatcher {
@@ -481,7 +418,8 @@ impl SpectralMatcher {
         let sample_capacity = ((HISTORY_SECONDS * rate) as usize).next_power_of_two();
         let win = analyzer.win;
         let n_patterns = infos.len();
-        shrink_takes_towards_their_mean(&mut templates, &infos);
+        let kinds: Vec<PatternKind> = infos.iter().map(|i| i.kind).collect();
+        shrink_takes_towards_their_mean(&mut templates, &kinds);
         Self {
             rate,
             decision_frames,
@@ -535,6 +473,12 @@ impl SpectralMatcher {
             background_score: f32::NEG_INFINITY,
             collected: None,
         }
+    }
+
+    /// The first onsets placed (samples of stream), up to `PLACED_KEPT`: where the
+    /// stream put the onsets of what it heard first (enrolment's probe of a take).
+    pub(super) fn placed_onsets(&self) -> &[u64] {
+        &self.placed[..self.placed_count]
     }
 
     /// Keeps a record of every onset from now on (grows with the stream: offline).
@@ -1220,211 +1164,12 @@ fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f6
     Some(rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
 }
 
-/// What [`take_features`] finds in one take.
-struct TakeFeatures {
-    /// Normalised decision frames from the onset.
-    features: Vec<f32>,
-    /// Energy of the samples in the decision window from the onset.
-    early_energy: f64,
-    /// Mean frame after the onset (for sustained sounds)...
-    mean_frame: Vec<f32>,
-    /// ...over this many frames.
-    mean_frames: usize,
-    /// As `features` and `early_energy` from every later frame of the take.
-    later_features: Vec<f32>,
-    later_energy: Vec<f64>,
-}
-
-/// Features of one take from its onset (`onset_in_take`, from [`take_onsets`]): runs
-/// the same analysis over the take (after a little silence) as over a stream.
-fn take_features(
-    analyzer: &mut Analyzer,
-    take: &[f32],
-    decision_frames: usize,
-    onset_in_take: usize,
-) -> TakeFeatures {
-    let hop = analyzer.hop;
-    let win = analyzer.win;
-    let lead = win;
-    let tail = (decision_frames + 2 * MAX_SHIFT + 2) * hop + win;
-    let mut padded = vec![0.0f32; lead + take.len() + tail];
-    padded[lead..lead + take.len()].copy_from_slice(take);
-    let n_frames = (padded.len() - win) / hop + 1;
-    let mut frames = vec![0.0f32; n_frames * BANDS];
-    for f in 0..n_frames {
-        let (a, b) = (f * hop, f * hop + win);
-        let mut frame = vec![0.0f32; BANDS];
-        analyzer.frame(&padded[a..b], &mut frame);
-        frames[f * BANDS..(f + 1) * BANDS].copy_from_slice(&frame);
-    }
-    let onset =
-        ((lead + onset_in_take).saturating_sub(win / 2) as f64 / hop as f64).round() as usize;
-    let onset = onset.min(n_frames - 1);
-    let early_len = decision_frames * hop;
-    let onset_sample = lead + onset_in_take;
-    let pooled_from = |first: usize, out: &mut [f32]| {
-        pool_features(
-            decision_frames,
-            |k| {
-                let f = (first + k).min(n_frames - 1);
-                &frames[f * BANDS..(f + 1) * BANDS]
-            },
-            &analyzer.cepstrum,
-            out,
-        )
-    };
-    let energy_from = |start: usize| -> f64 {
-        padded[start.min(padded.len())..(start + early_len).min(padded.len())]
-            .iter()
-            .map(|&x| f64::from(x) * f64::from(x))
-            .sum()
-    };
-    let mut features = vec![0.0f32; FEATURES];
-    pooled_from(onset, &mut features);
-    let early_energy = energy_from(onset_sample);
-    let take_frames_end = ((lead + take.len()).saturating_sub(win) / hop)
-        .max(onset + 1)
-        .min(n_frames);
-    let mut mean = vec![0.0f32; BANDS];
-    let count = take_frames_end - onset;
-    for f in onset..take_frames_end {
-        for (m, x) in mean.iter_mut().zip(&frames[f * BANDS..(f + 1) * BANDS]) {
-            *m += x / count as f32;
-        }
-    }
-    let later = count - 1;
-    let mut later_features = vec![0.0f32; later * FEATURES];
-    let mut later_energy = vec![0.0f64; later];
-    for k in 1..=later {
-        pooled_from(
-            onset + k,
-            &mut later_features[(k - 1) * FEATURES..k * FEATURES],
-        );
-        later_energy[k - 1] = energy_from(onset_sample + k * hop);
-    }
-    TakeFeatures {
-        features,
-        early_energy,
-        mean_frame: mean,
-        mean_frames: count,
-        later_features,
-        later_energy,
-    }
-}
-
-/// Where a stream places a take's onset, in samples: the take is run through the
-/// stream's own stages (onset detection and placement) after 0.3 s of noise, and the
-/// first onset placed on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest is
-/// its onset. Where that lies depends on the room: a spoken "pew" opens with a "p" 20
-/// dB below its vowel, found in a quiet room and lost in the noise of a loud one. So
-/// it is placed twice: in the loudest room the take allows (noise at the power of its
-/// quietest 5 ms, which is sound, as takes are cut close), and in one quiet enough for
-/// every part of the take to stand `ONSET_ABOVE_FLOOR_DB` out. Returns the first
-/// placement, and the second when it differs by more than a hop. A take the onset
-/// stage finds nothing in is placed on its first block within `ONSET_RANGE_DB` of its
-/// loudest. On the development sets a quiet room's placement raised the mean F1 from
-/// 0.786 to 0.804 (D4_voice_m7 0.744 to 0.887, D4_voice_rpf1 0.741 to 0.891) and let
-/// two more of those voices' words in speech pass for their patterns (rooms 5 and 10
-/// dB quieter besides changed nothing; louder ones let speech through:
-/// `docs/onset-stage.md`).
-fn take_onsets(take: &[f32], settings: &DetectorSettings, hop: usize) -> (usize, Option<usize>) {
-    let fallback = first_block_within(take, hop, ONSET_RANGE_DB as f32);
-    let rate = f64::from(settings.sample_rate);
-    let block = ((0.005 * rate) as usize).max(1);
-    let powers: Vec<f32> = take
-        .chunks(block)
-        .map(|c| c.iter().map(|v| v * v).sum::<f32>() / c.len() as f32)
-        .collect();
-    let quietest = powers.iter().cloned().fold(f32::INFINITY, f32::min);
-    let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
-    if loudest.is_nan() || loudest <= 0.0 {
-        return (fallback, None);
-    }
-    let loud_room = quietest.max(loudest * 1e-9);
-    let quiet_room = loud_room * 10f32.powf(-ONSET_ABOVE_FLOOR_DB / 10.0);
-    let first = probe_onset(take, settings, loud_room, loudest).unwrap_or(fallback);
-    let second =
-        probe_onset(take, settings, quiet_room, loudest).filter(|&at| at.abs_diff(first) > hop);
-    (first, second)
-}
-
-/// The first onset a stream places on `take` after 0.3 s of white noise of power
-/// `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of `loudest` (the take's
-/// loudest 5 ms power); samples from the take's start.
-fn probe_onset(
-    take: &[f32],
-    settings: &DetectorSettings,
-    noise_power: f32,
-    loudest: f32,
-) -> Option<usize> {
-    let rate = f64::from(settings.sample_rate);
-    let block = ((0.005 * rate) as usize).max(1);
-    let lead = (0.3 * rate) as usize;
-    // Uniform in ±a has power a²/3.
-    let amplitude = (3.0 * noise_power).sqrt();
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let noise: Vec<f32> = (0..lead)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
-        })
-        .collect();
-    let mut probe = SpectralMatcher::new(Vec::new(), settings);
-    let mut no_events = Vec::new();
-    probe.push(&noise, &mut no_events);
-    probe.push(take, &mut no_events);
-    probe.finish(&mut no_events);
-    let wanted = loudest * 10f32.powf(-TAKE_ONSET_RANGE_DB / 10.0);
-    // The power of the 5-10 ms from a sample on.
-    let power_at = |at: usize| {
-        let (i, n) = (at / block, take.len().div_ceil(block));
-        let mean = |i: usize| {
-            let c = &take[(i * block).min(take.len())..((i + 1) * block).min(take.len())];
-            c.iter().map(|v| v * v).sum::<f32>() / c.len().max(1) as f32
-        };
-        mean(i.min(n - 1)).max(mean((i + 1).min(n - 1)))
-    };
-    // An onset placed a little before the take's first sample (the take was cut on its
-    // burst) is at its start.
-    let early_slack = (0.005 * rate) as usize;
-    probe.placed[..probe.placed_count]
-        .iter()
-        .map(|&at| at as usize)
-        .filter(|&at| at + early_slack >= lead)
-        .map(|at| at.saturating_sub(lead))
-        .find(|&at| at < take.len() && power_at(at) >= wanted)
-}
-
-/// A held sound's soft start: sound within this many dB of its loudest...
-const SOFT_ONSET_RANGE_DB: f32 = 30.0;
-/// ...that begins this long before the take's onset gets a template of its own.
-const SOFT_ONSET_GAP_SECONDS: f64 = 0.01;
-
-/// A streamed onset must lie on sound within this many dB of the take's loudest to be
-/// the take's: not on the room before it. The onset stage finds the "p" of a spoken
-/// "ping" 25-35 dB under its vowel in a stream, so a take's onset must be allowed there
-/// too (on the development sets 35, 40, 45 and 60 dB give the same figures; 25 dB
-/// loses exact copies: docs/onset-stage.md).
-const TAKE_ONSET_RANGE_DB: f32 = 40.0;
-
-/// First window of about 1.5 ms (at 22 kHz; `hop / 2` samples) within `range_db` of
-/// the loudest block of the first 150 ms of `take`: its onset (`ONSET_RANGE_DB`), or
-/// its soft start (`SOFT_ONSET_RANGE_DB`).
-fn first_block_within(take: &[f32], hop: usize, range_db: f32) -> usize {
-    let head = take.len().min((0.15 / HOP_SECONDS * hop as f64) as usize) as u64;
-    let block = (hop as u64 / 2).max(1);
-    let wanted = |loudest: f64| loudest * 10f64.powf(-f64::from(range_db) / 10.0);
-    first_window_within(0, head, block, |n| take[n as usize], wanted).map_or(0, |n| n as usize)
-}
-
 /// The first start `n` in `[from, to - block]` of a window of `block` samples whose
 /// energy reaches `wanted(loudest)`, `loudest` being the greatest such window's energy
 /// there. Windows slide a sample at a time, so a signal shifted by some samples gives
 /// an onset shifted by as many, whatever the frames' grid (`sample(n)` reads sample
 /// `n`; nothing is allocated).
-fn first_window_within(
+pub(super) fn first_window_within(
     from: u64,
     to: u64,
     block: u64,
