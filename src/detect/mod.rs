@@ -14,6 +14,7 @@ mod envelope;
 mod features;
 pub mod gates;
 pub mod onset;
+mod pitch;
 pub mod spectral;
 pub mod waveform;
 

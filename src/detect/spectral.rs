@@ -62,6 +62,7 @@ use super::features::{
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::onset::{OnsetDetector, OnsetParams};
+use super::pitch::PitchEstimator;
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
@@ -70,11 +71,6 @@ use crate::pattern::Pattern;
 /// (`GateParams::pre_quiet_db`).
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.010;
-const PITCH_MIN_HZ: f64 = 60.0;
-const PITCH_MAX_HZ: f64 = 500.0;
-const PITCH_WINDOW_SECONDS: f64 = 0.1;
-/// A held sound is voiced when its autocorrelation reaches this at some lag.
-const VOICED_CORRELATION: f64 = 0.6;
 /// An onset is placed on the samples this many frames after its detection, once the
 /// attack has arrived.
 const PLACE_AFTER_FRAMES: u64 = 3;
@@ -210,8 +206,7 @@ pub struct SpectralMatcher {
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
-    /// Correlation per lag, for pitch estimation (lags `min - 1 ..= max + 1`).
-    pitch_correlations: Vec<f64>,
+    pitch: PitchEstimator,
     finished: bool,
     /// Spans (first and last sample) of the last recognised sounds, a ring; a held
     /// sound's span is open (`u64::MAX`) until it ends.
@@ -445,12 +440,7 @@ impl SpectralMatcher {
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
-            pitch_correlations: vec![
-                0.0;
-                ((rate / PITCH_MIN_HZ).ceil() - (rate / PITCH_MAX_HZ).floor())
-                    as usize
-                    + 3
-            ],
+            pitch: PitchEstimator::new(rate),
             analyzer,
             finished: false,
             recognised: [(u64::MAX, u64::MAX); RECOGNISED_SPANS],
@@ -1082,7 +1072,8 @@ impl SpectralMatcher {
         // Mean power over the held sound (its most recent half second when longer).
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
-        let pitch = self.estimate_pitch(lo, hi);
+        let (samples, len) = (&self.samples, self.samples.len() as u64);
+        let pitch = self.pitch.estimate(lo, hi, |n| samples[(n % len) as usize]);
         let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
@@ -1096,72 +1087,6 @@ impl SpectralMatcher {
             pitch,
         });
     }
-
-    /// Fundamental frequency (60-500 Hz) over the middle of samples [lo, hi), by
-    /// normalised autocorrelation: the shortest lag whose correlation is within 10% of
-    /// the best. `None` when the best correlation is below `VOICED_CORRELATION`
-    /// (unvoiced, noisy) or the span is too short. Reads the sample ring in place.
-    fn estimate_pitch(&mut self, lo: u64, hi: u64) -> Option<f64> {
-        let min_lag = (self.rate / PITCH_MAX_HZ).floor() as u64;
-        let max_lag = (self.rate / PITCH_MIN_HZ).ceil() as u64;
-        let span = hi.saturating_sub(lo);
-        let len = ((PITCH_WINDOW_SECONDS * self.rate) as u64).min(span.saturating_sub(max_lag + 1));
-        if len < 2 * max_lag {
-            return None;
-        }
-        let start = lo + (span - len - max_lag) / 2;
-        // Every lag's correlation once, into the buffer made in `new` (taking it out of
-        // `self` and back does not allocate).
-        let mut by_lag = std::mem::take(&mut self.pitch_correlations);
-        let correlation = |lag: u64| {
-            let (mut xy, mut xx, mut yy) = (0.0f64, 0.0f64, 0.0f64);
-            for n in start..start + len {
-                let (x, y) = (f64::from(self.sample(n)), f64::from(self.sample(n + lag)));
-                xy += x * y;
-                xx += x * x;
-                yy += y * y;
-            }
-            if xx > 0.0 && yy > 0.0 {
-                xy / (xx * yy).sqrt()
-            } else {
-                0.0
-            }
-        };
-        for (slot, lag) in by_lag.iter_mut().zip(min_lag - 1..=max_lag + 1) {
-            *slot = correlation(lag);
-        }
-        let result = pitch_from_correlations(&by_lag, min_lag, self.rate);
-        self.pitch_correlations = by_lag;
-        result
-    }
-}
-
-/// Pitch from the correlations of lags `min_lag - 1 ..= max_lag + 1` (`by_lag[0]` is
-/// lag `min_lag - 1`): the shortest lag within 10% of the best, walked up to its local
-/// peak and refined with a parabola through 3 points.
-fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f64> {
-    let corr = |lag: u64| by_lag[(lag + 1 - min_lag) as usize];
-    let max_lag = min_lag + by_lag.len() as u64 - 3;
-    let best = (min_lag..=max_lag)
-        .map(corr)
-        .fold(f64::NEG_INFINITY, f64::max);
-    if best < VOICED_CORRELATION {
-        return None;
-    }
-    let lag = (min_lag..=max_lag).find(|&l| corr(l) >= 0.9 * best)?;
-    // Walk up to the local peak, then refine it with a parabola through 3 points.
-    let mut lag = lag;
-    while lag < max_lag && corr(lag + 1) > corr(lag) {
-        lag += 1;
-    }
-    let (a, b, c) = (corr(lag - 1), corr(lag), corr(lag + 1));
-    let denom = a - 2.0 * b + c;
-    let shift = if denom.abs() > 1e-12 {
-        0.5 * (a - c) / denom
-    } else {
-        0.0
-    };
-    Some(rate / (lag as f64 + shift.clamp(-0.5, 0.5)))
 }
 
 /// The first start `n` in `[from, to - block]` of a window of `block` samples whose
