@@ -34,6 +34,27 @@ fn read(path: &Path) -> Vec<f32> {
     resample_clip(&src.read_all().unwrap(), rate, RATE).unwrap()
 }
 
+/// The spectral method's default settings.
+fn spectral() -> DetectorSettings {
+    DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    }
+}
+
+/// `patterns` without the one named `name`.
+fn without(patterns: Vec<Pattern>, name: &str) -> Vec<Pattern> {
+    patterns.into_iter().filter(|p| &*p.name != name).collect()
+}
+
+/// The impulse patterns of `patterns`.
+fn impulses(patterns: Vec<Pattern>) -> Vec<Pattern> {
+    patterns
+        .into_iter()
+        .filter(|p| p.kind == PatternKind::Impulse)
+        .collect()
+}
+
 /// Where a sound really is: its first and last 10 ms frames within 30 dB of its loudest.
 fn span(x: &[f32]) -> (usize, usize) {
     let hop = (RATE / 100) as usize;
@@ -75,10 +96,7 @@ fn held_fricatives_and_vowels_of_a_voice_are_found_with_their_span() {
         "sox",
         &[&p("aa-raw.wav"), &p("aa-core.wav"), "trim", "0.15", "0.2"],
     );
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
+    let settings = spectral();
     let take = |core: &str| read(&dir.join(core))[..samples_for(0.15, RATE)].to_vec();
     let patterns = vec![
         Pattern::from_samples(
@@ -198,10 +216,7 @@ fn paragraph(dir: &Path) -> Vec<f32> {
 #[test]
 fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
     let dir = temp_dir("speech");
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
+    let settings = spectral();
     let patterns = enrolled_words(&dir, &settings);
     let speech = paragraph(&dir);
     let minutes = speech.len() as f64 / f64::from(RATE) / 60.0;
@@ -233,11 +248,7 @@ fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
     // with a "t" 20 dB below its vowel, on which its take's onset must be placed as an
     // instance's is. A word's final consonant ("pop") may give a second event of its
     // own.
-    let alone_patterns: Vec<Pattern> = patterns
-        .iter()
-        .filter(|p| &*p.name != "pew")
-        .cloned()
-        .collect();
+    let alone_patterns = without(patterns, "pew");
     for (words, seed) in [(&["pop", "boom"][..], 5), (&["tick"][..], 6)] {
         said_alone_are_found(&dir, &alone_patterns, &settings, words, seed);
     }
@@ -298,15 +309,9 @@ fn said_alone_are_found(
 #[test]
 fn a_word_said_0_6_s_after_speech_is_found() {
     let dir = temp_dir("after-speech");
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
+    let settings = spectral();
     // Without "pew", whose first 25 ms are those of "pop" (see above).
-    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
-        .into_iter()
-        .filter(|p| &*p.name != "pew")
-        .collect();
+    let patterns = without(enrolled_words(&dir, &settings), "pew");
     let speech = paragraph(&dir);
     // The paragraph's first sentence or so, cut where the voice is silent.
     let cut = {
@@ -389,16 +394,10 @@ fn f1_against(events: &[onomato::Event], truth: &[(&str, f64)]) -> (f64, String)
 #[test]
 fn exact_copies_of_the_takes_are_all_found_at_any_gain_in_noise_even_after_a_miss() {
     let dir = temp_dir("exact-copies");
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
+    let settings = spectral();
     // "pop" and "pew" share their first 25 ms (see above): "pew" stays, as its soft
     // start is what a stream places differently by the noise around it.
-    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
-        .into_iter()
-        .filter(|p| p.kind == PatternKind::Impulse && &*p.name != "pop")
-        .collect();
+    let patterns = without(impulses(enrolled_words(&dir, &settings)), "pop");
     let mut rng = Rng::new(31);
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
@@ -434,14 +433,8 @@ fn exact_copies_of_the_takes_are_all_found_at_any_gain_in_noise_even_after_a_mis
 #[ignore = "open: F1 0.94; of 26 words, 2 that follow a \"boom\" 0.2 s before are stopped by the quiet-before gate (they rise 5-6 dB out of its vowel, as a consonant in speech does), and a \"boom\" scores 0.84 against its take and 0.89 against the background of speech"]
 fn words_said_on_a_rhythm_at_150_bpm_are_each_found() {
     let dir = temp_dir("rhythm");
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
-    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
-        .into_iter()
-        .filter(|p| p.kind == PatternKind::Impulse && &*p.name != "pew")
-        .collect();
+    let settings = spectral();
+    let patterns = without(impulses(enrolled_words(&dir, &settings)), "pew");
     let names = ["tick", "pop", "boom"];
     let quick: Vec<Vec<f32>> = names
         .iter()
@@ -480,13 +473,7 @@ fn words_said_on_a_rhythm_at_150_bpm_are_each_found() {
 #[test]
 fn a_soft_attack_pew_said_alone_is_found() {
     let dir = temp_dir("pew");
-    let settings = DetectorSettings {
-        method: Method::Spectral,
-        ..DetectorSettings::default()
-    };
-    let patterns: Vec<Pattern> = enrolled_words(&dir, &settings)
-        .into_iter()
-        .filter(|p| &*p.name != "pop")
-        .collect();
+    let settings = spectral();
+    let patterns = without(enrolled_words(&dir, &settings), "pop");
     said_alone_are_found(&dir, &patterns, &settings, &["pew"], 7);
 }

@@ -54,21 +54,14 @@ pub(super) fn shrink_takes_towards_their_mean(templates: &mut [Template], kinds:
             continue;
         }
         mean.fill(0.0);
-        let takes = || {
-            templates
-                .iter()
-                .filter(|t| t.pattern == pi && !t.second_placement)
-        };
-        for t in takes() {
+        let is_take = |t: &Template| t.pattern == pi && !t.second_placement;
+        for t in templates.iter().filter(|t| is_take(t)) {
             for (m, x) in mean.iter_mut().zip(&t.features) {
                 *m += x;
             }
         }
         scale_to_unit(&mut mean);
-        for t in templates
-            .iter_mut()
-            .filter(|t| t.pattern == pi && !t.second_placement)
-        {
+        for t in templates.iter_mut().filter(|t| is_take(t)) {
             for (x, m) in t.features.iter_mut().zip(&mean) {
                 *x += TAKE_SHRINK * m;
             }
@@ -203,23 +196,25 @@ pub(super) fn take_onsets(
     }
     let loud_room = quietest.max(loudest * 1e-9);
     let quiet_room = loud_room * 10f32.powf(-ONSET_ABOVE_FLOOR_DB / 10.0);
-    let first = probe_onset(take, settings, loud_room, loudest).unwrap_or(fallback);
-    let second =
-        probe_onset(take, settings, quiet_room, loudest).filter(|&at| at.abs_diff(first) > hop);
+    let placed = |noise_power| probe_onset(take, settings, noise_power, &powers, block);
+    let first = placed(loud_room).unwrap_or(fallback);
+    let second = placed(quiet_room).filter(|&at| at.abs_diff(first) > hop);
     (first, second)
 }
 
 /// The first onset a stream places on `take` after 0.3 s of white noise of power
-/// `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of `loudest` (the take's
-/// loudest 5 ms power); samples from the take's start.
+/// `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest;
+/// samples from the take's start. `powers` are the take's mean powers over blocks of
+/// `block` samples.
 fn probe_onset(
     take: &[f32],
     settings: &DetectorSettings,
     noise_power: f32,
-    loudest: f32,
+    powers: &[f32],
+    block: usize,
 ) -> Option<usize> {
     let rate = f64::from(settings.sample_rate);
-    let block = ((0.005 * rate) as usize).max(1);
+    let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
     let lead = (0.3 * rate) as usize;
     // Uniform in ±a has power a²/3.
     let amplitude = (3.0 * noise_power).sqrt();
@@ -240,12 +235,8 @@ fn probe_onset(
     let wanted = loudest * 10f32.powf(-TAKE_ONSET_RANGE_DB / 10.0);
     // The power of the 5-10 ms from a sample on.
     let power_at = |at: usize| {
-        let (i, n) = (at / block, take.len().div_ceil(block));
-        let mean = |i: usize| {
-            let c = &take[(i * block).min(take.len())..((i + 1) * block).min(take.len())];
-            c.iter().map(|v| v * v).sum::<f32>() / c.len().max(1) as f32
-        };
-        mean(i.min(n - 1)).max(mean((i + 1).min(n - 1)))
+        let i = at / block;
+        powers[i.min(powers.len() - 1)].max(powers[(i + 1).min(powers.len() - 1)])
     };
     // An onset placed a little before the take's first sample (the take was cut on its
     // burst) is at its start.

@@ -35,8 +35,9 @@
 //!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 200 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
-//! inside a sentence follows its words; a missed hit is shorter). A recognised impulse covers its take's length,
-//! longer while its sound goes on; a held sound, until its end.
+//! inside a sentence follows its words; a missed hit is shorter). A recognised impulse
+//! covers its take's length, longer while its sound goes on; a held sound, until its
+//! end.
 //!
 //! Continuous patterns: after an onset classified as one, the event is held while each
 //! frame still resembles the pattern's sustained spectrum (its mean frame after the
@@ -173,9 +174,6 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
     BackgroundModel::new(FEATURES, matcher.decision_frames, templates)
 }
 
-/// An onset is taken for speech when the background's nearest sound scores at least
-/// its best pattern's score plus this. The margin, and the speech guard's default
-/// length, are the pair chosen by the sweep over the development sets in
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
 
@@ -322,12 +320,12 @@ struct ExtendingSpan {
     /// Last sample the span may reach.
     limit: u64,
 }
-/// The speech guard's unrecognised sound: this long in all. Speech fills most of the
-/// guard's span with sound; a hit that no pattern recognised (a miss, a cough) holds its
-/// level for well under 200 ms, so it does not stop the hits after it. Chosen with the
-/// guard's span by a sweep over the development sets (`docs/speech-guard.md`): with the
-/// old 60 ms, a guard long enough to keep a voice's own speech out stopped the hits
-/// after every miss...
+/// Speech fills most of the guard's span with sound; a hit that no pattern recognised
+/// (a miss, a cough) holds its level for well under 200 ms, so it does not stop the
+/// hits after it. Chosen with the guard's span by a sweep over the development sets
+/// (`docs/speech-guard.md`): with 60 ms, a guard long enough to keep a voice's own
+/// speech out stopped the hits after every miss. The speech guard's unrecognised
+/// sound: this long in all...
 const GUARD_SOUND_SECONDS: f64 = 0.2;
 /// ...within this many dB of the new sound's peak. On the 48 s of synthetic speech of
 /// `scripts/eval-speech.sh` with a guard of 0.5 s (threshold 0.3): 104 false events
