@@ -4,7 +4,9 @@
 //! and its features are those the features stage gives a stream at that onset. Runs
 //! when a detector is built (on the thread that builds it), never per block.
 
-use super::features::{pool_features, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS};
+use super::features::{
+    features_of_power, pool_power, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS,
+};
 use super::spectral::{
     first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_ABOVE_FLOOR_DB, ONSET_RANGE_DB,
 };
@@ -18,6 +20,12 @@ pub(super) struct Template {
     pub(super) second_placement: bool,
     /// Centred, unit-norm features of the first frames after the take's onset.
     pub(super) features: Vec<f32>,
+    /// The mean power spectrum (linear) that `features` were made from, before the
+    /// shrink: for hearing the take in another room ([`super::classify`]).
+    pub(super) pooled_power: Vec<f32>,
+    /// What the shrink added to `features` (`TAKE_SHRINK` times its pattern's mean),
+    /// when it did.
+    pub(super) drawn_towards: Option<Vec<f32>>,
     /// Energy of the take's samples over the decision window.
     pub(super) early_energy: f64,
     /// Length of the take from its onset, samples: how long an instance is taken to
@@ -61,19 +69,23 @@ pub(super) fn shrink_takes_towards_their_mean(templates: &mut [Template], kinds:
             }
         }
         scale_to_unit(&mut mean);
+        let drawn: Vec<f32> = mean.iter().map(|m| TAKE_SHRINK * m).collect();
         for t in templates.iter_mut().filter(|t| is_take(t)) {
-            for (x, m) in t.features.iter_mut().zip(&mean) {
-                *x += TAKE_SHRINK * m;
+            for (x, d) in t.features.iter_mut().zip(&drawn) {
+                *x += d;
             }
             scale_to_unit(&mut t.features);
+            t.drawn_towards = Some(drawn.clone());
         }
     }
 }
 
 /// What [`take_features`] finds in one take.
 pub(super) struct TakeFeatures {
-    /// Normalised decision frames from the onset.
+    /// Normalised decision frames from the onset...
     pub(super) features: Vec<f32>,
+    /// ...from their mean power spectrum (linear).
+    pub(super) pooled_power: Vec<f32>,
     /// Energy of the samples in the decision window from the onset.
     pub(super) early_energy: f64,
     /// Mean frame after the onset (for sustained sounds)...
@@ -112,16 +124,20 @@ pub(super) fn take_features(
     let onset = onset.min(n_frames - 1);
     let early_len = decision_frames * hop;
     let onset_sample = lead + onset_in_take;
-    let pooled_from = |first: usize, out: &mut [f32]| {
-        pool_features(
+    let power_from = |first: usize, power: &mut [f32]| {
+        pool_power(
             decision_frames,
             |k| {
                 let f = (first + k).min(n_frames - 1);
                 &frames[f * BANDS..(f + 1) * BANDS]
             },
-            &analyzer.cepstrum,
-            out,
+            power,
         )
+    };
+    let mut pooled_power = vec![0.0f32; BANDS];
+    let pooled_from = |first: usize, power: &mut [f32], out: &mut [f32]| {
+        power_from(first, power);
+        features_of_power(power, &analyzer.cepstrum, out);
     };
     let energy_from = |start: usize| -> f64 {
         padded[start.min(padded.len())..(start + early_len).min(padded.len())]
@@ -130,7 +146,7 @@ pub(super) fn take_features(
             .sum()
     };
     let mut features = vec![0.0f32; FEATURES];
-    pooled_from(onset, &mut features);
+    pooled_from(onset, &mut pooled_power, &mut features);
     let early_energy = energy_from(onset_sample);
     let take_frames_end = ((lead + take.len()).saturating_sub(win) / hop)
         .max(onset + 1)
@@ -146,14 +162,17 @@ pub(super) fn take_features(
     let mut later_features = vec![0.0f32; later * FEATURES];
     let mut later_energy = vec![0.0f64; later];
     for k in 1..=later {
+        let mut power = [0.0f32; BANDS];
         pooled_from(
             onset + k,
+            &mut power,
             &mut later_features[(k - 1) * FEATURES..k * FEATURES],
         );
         later_energy[k - 1] = energy_from(onset_sample + k * hop);
     }
     TakeFeatures {
         features,
+        pooled_power,
         early_energy,
         mean_frame: mean,
         mean_frames: count,

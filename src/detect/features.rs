@@ -182,29 +182,33 @@ pub(super) fn cepstrum_basis() -> Vec<f32> {
     basis
 }
 
-/// Pools `k` consecutive frames (each `BANDS` dB values, from `frame(i)`) into one mean
-/// power spectrum (in dB), floors it, and turns it into weighted cepstral coefficients
-/// of unit norm (`basis` from [`cepstrum_basis`]). Averaging powers rather than dB
-/// lets the loud frames of the attack lead: on the real recordings of
-/// `examples/eval_beatbox.rs` (with plain correlations, before `LIFTER_POWER`) it
-/// raised the F1 of rec6 from 0.39 to 0.43 and of the repeated set from 0.66 to 0.71
-/// (isolated, rec3 unchanged). One spectrum over the
-/// whole window scored best: finer time detail (2 or 3 sub-windows) follows the
-/// articulation of one take too closely.
-pub(super) fn pool_features<'a>(
-    k: usize,
-    frame: impl Fn(usize) -> &'a [f32],
-    basis: &[f32],
-    out: &mut [f32],
-) {
-    let mut pooled = [0.0f32; BANDS];
+/// The mean power spectrum (linear) of `k` consecutive frames (each `BANDS` dB values,
+/// from `frame(i)`), into `out`: what [`features_of_power`] turns into features.
+/// Averaging powers rather than dB lets the loud frames of the attack lead: on the
+/// real recordings of `examples/eval_beatbox.rs` (with plain correlations, before
+/// `LIFTER_POWER`) it raised the F1 of rec6 from 0.39 to 0.43 and of the repeated set
+/// from 0.66 to 0.71 (isolated, rec3 unchanged). One spectrum over the whole window
+/// scored best: finer time detail (2 or 3 sub-windows) follows the articulation of one
+/// take too closely.
+pub(super) fn pool_power<'a>(k: usize, frame: impl Fn(usize) -> &'a [f32], out: &mut [f32]) {
+    out.fill(0.0);
     for i in 0..k {
-        for (d, x) in pooled.iter_mut().zip(frame(i)) {
+        for (d, x) in out.iter_mut().zip(frame(i)) {
             *d += 10f32.powf(x / 10.0);
         }
     }
-    for d in pooled.iter_mut() {
-        *d = 10.0 * (*d / k.max(1) as f32 + 1e-12).log10();
+    for d in out.iter_mut() {
+        *d /= k.max(1) as f32;
+    }
+}
+
+/// The features of a pooled power spectrum (from [`pool_power`]): in dB, floored
+/// `POOLED_RANGE_DB` under its loudest band, turned into weighted cepstral coefficients
+/// of unit norm (`basis` from [`cepstrum_basis`]), into `out`.
+pub(super) fn features_of_power(power: &[f32], basis: &[f32], out: &mut [f32]) {
+    let mut pooled = [0.0f32; BANDS];
+    for (d, p) in pooled.iter_mut().zip(power) {
+        *d = 10.0 * (p + 1e-12).log10();
     }
     let loudest = pooled.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
     for x in pooled.iter_mut() {
@@ -239,6 +243,18 @@ pub(super) fn normalise(v: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The features of `k` frames.
+    fn pool_features<'a>(
+        k: usize,
+        frame: impl Fn(usize) -> &'a [f32],
+        basis: &[f32],
+        out: &mut [f32],
+    ) {
+        let mut pooled = [0.0f32; BANDS];
+        pool_power(k, frame, &mut pooled);
+        features_of_power(&pooled, basis, out);
+    }
 
     const RATE: f64 = 22_050.0;
 

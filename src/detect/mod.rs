@@ -9,6 +9,7 @@
 //! [`Detector::process`] allocates nothing, provided the caller's event vector has room.
 
 pub mod background;
+mod classify;
 mod enrol;
 mod envelope;
 mod features;

@@ -156,6 +156,11 @@ impl OnsetDetector {
         }
     }
 
+    /// Per band: the noise floor (linear power, as the frames fed).
+    pub fn band_floors(&self) -> &[f32] {
+        &self.floor
+    }
+
     /// Feeds the next frame's band powers (linear); returns the onset whose peak was
     /// the frame before, if there is one.
     pub fn push(&mut self, power: &[f32]) -> Option<Onset> {

@@ -53,13 +53,14 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::background::BackgroundModel;
+use super::classify::{noise_over_floor, Room};
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets, TakeFeatures,
     Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    normalise, pool_features, scale_to_unit, similarity, Analyzer, BANDS, FEATURES, HOP_SECONDS,
-    WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
+    HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::onset::{OnsetDetector, OnsetParams};
@@ -204,6 +205,11 @@ pub struct SpectralMatcher {
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
+    /// The pooled power spectrum `instance` was made from.
+    instance_power: Vec<f32>,
+    /// The onset's room, and a take's features as heard in it.
+    room: Room,
+    heard_take: Vec<f32>,
     pitch: PitchEstimator,
     finished: bool,
     /// Spans (first and last sample) of the last recognised sounds, a ring; a held
@@ -368,6 +374,7 @@ impl SpectralMatcher {
                 for &(start, second_placement) in starts {
                     let TakeFeatures {
                         features,
+                        pooled_power,
                         early_energy,
                         mean_frame,
                         mean_frames,
@@ -378,6 +385,8 @@ impl SpectralMatcher {
                         pattern: pi,
                         second_placement,
                         features,
+                        pooled_power,
+                        drawn_towards: None,
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
                         later_features,
@@ -413,6 +422,12 @@ impl SpectralMatcher {
         let n_patterns = infos.len();
         let kinds: Vec<PatternKind> = infos.iter().map(|i| i.kind).collect();
         shrink_takes_towards_their_mean(&mut templates, &kinds);
+        // Nothing is compared without templates (enrolment's probe of a take).
+        let noise_over_floor = if templates.is_empty() {
+            vec![1.0; BANDS]
+        } else {
+            noise_over_floor(&mut analyzer, OnsetParams::default(), rate)
+        };
         Self {
             rate,
             decision_frames,
@@ -438,6 +453,9 @@ impl SpectralMatcher {
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
+            instance_power: vec![0.0; BANDS],
+            room: Room::new(noise_over_floor),
+            heard_take: vec![0.0; FEATURES],
             pitch: PitchEstimator::new(rate),
             analyzer,
             finished: false,
@@ -842,10 +860,18 @@ impl SpectralMatcher {
         self.pattern_scores.fill(PatternScore::NONE);
         self.background_score = f32::NEG_INFINITY;
         let mut best = f32::NEG_INFINITY;
+        self.room.set(self.onsets.band_floors());
         for shift in 0..=2 * MAX_SHIFT {
             self.pool_instance((onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64));
+            self.room.hear(&self.instance_power);
             for (ti, t) in self.templates.iter().enumerate() {
-                let score = similarity(&t.features, &self.instance);
+                self.room.take(
+                    &t.pooled_power,
+                    t.drawn_towards.as_deref(),
+                    &self.analyzer.cepstrum,
+                    &mut self.heard_take,
+                );
+                let score = similarity(&self.heard_take, &self.instance);
                 let s = &mut self.pattern_scores[t.pattern];
                 if score > s.take_score {
                     s.take_score = score;
@@ -927,12 +953,16 @@ impl SpectralMatcher {
     fn pool_instance(&mut self, first: u64) {
         let cap = self.frame_capacity as u64;
         let frames = &self.frames;
-        pool_features(
+        pool_power(
             self.decision_frames,
             |k| {
                 let slot = ((first + k as u64) % cap) as usize;
                 &frames[slot * BANDS..(slot + 1) * BANDS]
             },
+            &mut self.instance_power,
+        );
+        features_of_power(
+            &self.instance_power,
             &self.analyzer.cepstrum,
             &mut self.instance,
         );

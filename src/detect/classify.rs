@@ -1,0 +1,260 @@
+//! The classification stage's comparison: a take heard in the room of the onset it is
+//! compared with. Pure functions; the matcher calls them on the detector thread with
+//! buffers it made once.
+//!
+//! A take is enrolled in one room and an onset is heard in another. Where the onset's
+//! room is noisy, the bands its sound leaves quiet hold the room's noise, while the
+//! take's hold its own quiet: the features differ for the room alone, and a hit in a
+//! loud room resembles the patterns whose spectra happen to be flat in those bands.
+//! So each take is scored as it would sound in the onset's room (the noise model of
+//! Gales and Young's parallel model combination, in the power domain): its pooled
+//! power spectrum, scaled to the onset's sound, plus the room's noise. In a quiet room
+//! that is the take as enrolled.
+
+use super::features::{features_of_power, scale_to_unit, Analyzer};
+use super::onset::{OnsetDetector, OnsetParams};
+
+/// Steady noise this long, after as long again to settle, measures how far the onset
+/// stage's floors lie under the noise's mean power ([`noise_over_floor`]).
+const CALIBRATION_SECONDS: f64 = 2.0;
+
+/// Per band: the mean power of steady noise over the onset stage's floor for it. The
+/// floor follows a band's quietest frames (it falls at once and rises slowly), so it
+/// lies under the noise's mean, the further the fewer spectral bins the band sums (the
+/// more its power wanders). The ratio depends on neither the noise's level nor its
+/// colour, only on the band and the floor's rates: it is measured once, on seeded
+/// white noise through the same analysis and onset stage as the stream.
+pub(super) fn noise_over_floor(
+    analyzer: &mut Analyzer,
+    params: OnsetParams,
+    rate: f64,
+) -> Vec<f32> {
+    let bins = analyzer.band_bins();
+    let bands = bins.len();
+    let (win, hop) = (analyzer.win, analyzer.hop);
+    let mut onsets = OnsetDetector::new(params, &bins, win, hop, rate);
+    let settle = (CALIBRATION_SECONDS * rate) as usize;
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let noise: Vec<f32> = (0..2 * settle + win)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        })
+        .collect();
+    let mut frame = vec![0.0f32; bands];
+    let mut power = vec![0.0f32; bands];
+    let (mut mean, mut floor) = (vec![0.0f64; bands], vec![0.0f64; bands]);
+    for start in (0..=2 * settle).step_by(hop) {
+        analyzer.frame(&noise[start..start + win], &mut frame);
+        power.copy_from_slice(&analyzer.power);
+        onsets.push(&power);
+        if start >= settle {
+            for b in 0..bands {
+                mean[b] += f64::from(power[b]);
+                floor[b] += f64::from(onsets.band_floors()[b]);
+            }
+        }
+    }
+    mean.iter()
+        .zip(&floor)
+        .map(|(m, f)| if *f > 0.0 { (m / f) as f32 } else { 1.0 })
+        .collect()
+}
+
+/// The room an onset is heard in, set per onset ([`Room::set`]) and per pooled window
+/// of it ([`Room::hear`]); made once per matcher.
+pub(super) struct Room {
+    /// Per band: see [`noise_over_floor`].
+    noise_over_floor: Vec<f32>,
+    /// Per band: the room's noise power.
+    noise: Vec<f32>,
+    /// The onset's pooled power above the noise, over all bands.
+    onset_above_noise: f32,
+    /// Scratch: a take's power spectrum as heard in the room.
+    heard: Vec<f32>,
+}
+
+impl Room {
+    pub(super) fn new(noise_over_floor: Vec<f32>) -> Self {
+        let bands = noise_over_floor.len();
+        Self {
+            noise_over_floor,
+            noise: vec![0.0; bands],
+            onset_above_noise: 0.0,
+            heard: vec![0.0; bands],
+        }
+    }
+
+    /// The room's noise from the onset stage's per-band floors.
+    pub(super) fn set(&mut self, floors: &[f32]) {
+        for ((n, f), k) in self
+            .noise
+            .iter_mut()
+            .zip(floors)
+            .zip(&self.noise_over_floor)
+        {
+            *n = k * f;
+        }
+    }
+
+    /// The onset's sound: its pooled power spectrum (linear).
+    pub(super) fn hear(&mut self, onset_power: &[f32]) {
+        self.onset_above_noise = onset_power
+            .iter()
+            .zip(&self.noise)
+            .map(|(p, n)| (p - n).max(0.0))
+            .sum();
+    }
+
+    /// The features of a take (its pooled power spectrum `take_power`, and what the
+    /// enrolment shrink added to its features, `drawn_towards`) heard in this room at
+    /// the onset's level, into `out`: the take scaled so that it and the noise hold
+    /// the onset's power, plus the noise.
+    pub(super) fn take(
+        &mut self,
+        take_power: &[f32],
+        drawn_towards: Option<&[f32]>,
+        basis: &[f32],
+        out: &mut [f32],
+    ) {
+        let take: f32 = take_power.iter().sum();
+        let gain = if take > 0.0 {
+            self.onset_above_noise / take
+        } else {
+            0.0
+        };
+        for ((h, t), n) in self.heard.iter_mut().zip(take_power).zip(&self.noise) {
+            *h = gain * t + n;
+        }
+        features_of_power(&self.heard, basis, out);
+        if let Some(drawn) = drawn_towards {
+            for (x, d) in out.iter_mut().zip(drawn) {
+                *x += d;
+            }
+            scale_to_unit(out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::features::{cepstrum_basis, pool_power, similarity, BANDS, FEATURES};
+    use super::*;
+
+    const RATE: f64 = 22_050.0;
+
+    fn noise(n: usize, seed: u64) -> Vec<f32> {
+        let mut state = seed | 1;
+        (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_floor_lies_under_the_noise_the_more_the_narrower_the_band() {
+        let mut analyzer = Analyzer::new(RATE);
+        let ratio = noise_over_floor(&mut analyzer, OnsetParams::default(), RATE);
+        let bins = analyzer.band_bins();
+        assert!(ratio.iter().all(|&r| r > 1.5), "{ratio:?}");
+        // A one-bin band wanders most: its floor lies furthest under its mean.
+        let (narrow, wide) = (
+            (0..BANDS)
+                .min_by(|&a, &b| bins[a].total_cmp(&bins[b]))
+                .unwrap(),
+            (0..BANDS)
+                .max_by(|&a, &b| bins[a].total_cmp(&bins[b]))
+                .unwrap(),
+        );
+        assert!(ratio[narrow] > 2.0 * ratio[wide], "{ratio:?}");
+    }
+
+    /// The pooled power spectrum of `decision` frames of `x` from sample `from`.
+    fn pooled(analyzer: &mut Analyzer, x: &[f32], from: usize, frames: usize) -> Vec<f32> {
+        let (win, hop) = (analyzer.win, analyzer.hop);
+        let db: Vec<Vec<f32>> = (0..frames)
+            .map(|k| {
+                let mut f = vec![0.0f32; BANDS];
+                analyzer.frame(&x[from + k * hop..from + k * hop + win], &mut f);
+                f
+            })
+            .collect();
+        let mut power = vec![0.0f32; BANDS];
+        pool_power(frames, |k| &db[k], &mut power);
+        power
+    }
+
+    /// A low vowel-like buzz: harmonics of 150 Hz up to 1.5 kHz, nothing above.
+    fn buzz(n: usize) -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / RATE;
+                (1..=10)
+                    .map(|h| (2.0 * std::f64::consts::PI * 150.0 * h as f64 * t).sin() / h as f64)
+                    .sum::<f64>() as f32
+                    * 0.1
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_take_heard_in_the_onsets_room_matches_its_copy_in_noise() {
+        let mut analyzer = Analyzer::new(RATE);
+        let basis = cepstrum_basis();
+        let ratio = noise_over_floor(&mut analyzer, OnsetParams::default(), RATE);
+        let n = 4096;
+        let take = buzz(n);
+        // The same sound in a room whose hiss fills the bands it leaves empty.
+        let hiss: Vec<f32> = noise(n, 5).iter().map(|x| x * 0.05).collect();
+        let copy: Vec<f32> = take.iter().zip(&hiss).map(|(a, b)| a + b).collect();
+        let take_power = pooled(&mut analyzer, &take, 0, 8);
+        let copy_power = pooled(&mut analyzer, &copy, 0, 8);
+        // The room's floors, as the onset stage keeps them over a second of its noise.
+        let before: Vec<f32> = noise(RATE as usize, 6).iter().map(|x| x * 0.05).collect();
+        let (win, hop) = (analyzer.win, analyzer.hop);
+        let mut onsets = OnsetDetector::new(
+            OnsetParams::default(),
+            &analyzer.band_bins(),
+            win,
+            hop,
+            RATE,
+        );
+        let mut frame = vec![0.0f32; BANDS];
+        for start in (0..before.len() - win).step_by(hop) {
+            analyzer.frame(&before[start..start + win], &mut frame);
+            let power = analyzer.power.clone();
+            onsets.push(&power);
+        }
+        let floors = onsets.band_floors().to_vec();
+        let features = |power: &[f32]| {
+            let mut out = vec![0.0f32; FEATURES];
+            features_of_power(power, &basis, &mut out);
+            out
+        };
+        let copy_features = features(&copy_power);
+        let as_enrolled = similarity(&features(&take_power), &copy_features);
+        let mut room = Room::new(ratio.clone());
+        room.set(&floors);
+        room.hear(&copy_power);
+        let mut heard = vec![0.0f32; FEATURES];
+        room.take(&take_power, None, &basis, &mut heard);
+        let in_room = similarity(&heard, &copy_features);
+        assert!(in_room > 0.95, "{in_room} against {as_enrolled}");
+        assert!(
+            in_room > as_enrolled + 0.05,
+            "{in_room} against {as_enrolled}"
+        );
+
+        // In a silent room the take is heard as enrolled.
+        room.set(&[0.0; BANDS]);
+        room.hear(&take_power);
+        room.take(&take_power, None, &basis, &mut heard);
+        assert!(similarity(&heard, &features(&take_power)) > 0.9999);
+    }
+}
