@@ -22,8 +22,9 @@
 //! Classification: the frames of the first `decision_seconds` from the onset (the
 //! first one centred on it) are pooled into features ([`super::features`]) and
 //! compared by cosine with the same of every enrolment take (an impulse pattern's
-//! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), allowing a
-//! shift of ±1 frame. Each impulse pattern also has a tracked template that follows
+//! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), each take as
+//! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
+//! of ±1 frame. Each impulse pattern also has a tracked template that follows
 //! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern
 //! wins if its score passes its threshold; below, the sound is none of the patterns and
 //! nothing fires. Each onset is decided once, so a sound never gives two events. A
