@@ -1,6 +1,6 @@
 //! The classification stage's comparison: a take heard in the room of the onset it is
-//! compared with. Pure functions; the matcher calls them on the detector thread with
-//! buffers it made once.
+//! compared with. No state but scratch and the room's noise; the matcher calls it on
+//! the detector thread, with buffers made when it is built.
 //!
 //! A take is enrolled in one room and an onset is heard in another. Where the onset's
 //! room is noisy, the bands its sound leaves quiet hold the room's noise, while the
@@ -21,9 +21,10 @@ const CALIBRATION_SECONDS: f64 = 2.0;
 /// Per band: the mean power of steady noise over the onset stage's floor for it. The
 /// floor follows a band's quietest frames (it falls at once and rises slowly), so it
 /// lies under the noise's mean, the further the fewer spectral bins the band sums (the
-/// more its power wanders). The ratio depends on neither the noise's level nor its
-/// colour, only on the band and the floor's rates: it is measured once, on seeded
-/// white noise through the same analysis and onset stage as the stream.
+/// more its power wanders). The floor follows levels in dB, so the ratio does not
+/// depend on the noise's level, and within a band little on its colour: it is
+/// measured once, on seeded white noise through the same analysis and onset stage as
+/// the stream.
 pub(super) fn noise_over_floor(
     analyzer: &mut Analyzer,
     params: OnsetParams,
@@ -175,7 +176,7 @@ mod tests {
         assert!(ratio[narrow] > 2.0 * ratio[wide], "{ratio:?}");
     }
 
-    /// The pooled power spectrum of `decision` frames of `x` from sample `from`.
+    /// The pooled power spectrum of `frames` frames of `x` from sample `from`.
     fn pooled(analyzer: &mut Analyzer, x: &[f32], from: usize, frames: usize) -> Vec<f32> {
         let (win, hop) = (analyzer.win, analyzer.hop);
         let db: Vec<Vec<f32>> = (0..frames)
