@@ -31,10 +31,10 @@ pub(super) struct Template {
     /// Length of the take from its onset, samples: how long an instance is taken to
     /// last when judging the context of the next onset.
     pub(super) length_after_onset: u64,
-    /// The take's own later sounds: features as `features`, and energy over the
-    /// decision window, from every frame after the onset frame (`[k - 1]`: k frames
-    /// after it) to the end of the take.
-    pub(super) later_features: Vec<f32>,
+    /// The take's own later sounds: pooled power spectra as `pooled_power`, and
+    /// energy over the decision window, from every frame after the onset frame
+    /// (`[k - 1]`: k frames after it) to the end of the take.
+    pub(super) later_power: Vec<f32>,
     pub(super) later_energy: Vec<f64>,
 }
 
@@ -92,8 +92,8 @@ pub(super) struct TakeFeatures {
     pub(super) mean_frame: Vec<f32>,
     /// ...over this many frames.
     pub(super) mean_frames: usize,
-    /// As `features` and `early_energy` from every later frame of the take.
-    pub(super) later_features: Vec<f32>,
+    /// As `pooled_power` and `early_energy` from every later frame of the take.
+    pub(super) later_power: Vec<f32>,
     pub(super) later_energy: Vec<f64>,
 }
 
@@ -159,15 +159,10 @@ pub(super) fn take_features(
         }
     }
     let later = count - 1;
-    let mut later_features = vec![0.0f32; later * FEATURES];
     let mut later_energy = vec![0.0f64; later];
+    let mut later_power = vec![0.0f32; later * BANDS];
     for k in 1..=later {
-        let mut power = [0.0f32; BANDS];
-        pooled_from(
-            onset + k,
-            &mut power,
-            &mut later_features[(k - 1) * FEATURES..k * FEATURES],
-        );
+        power_from(onset + k, &mut later_power[(k - 1) * BANDS..k * BANDS]);
         later_energy[k - 1] = energy_from(onset_sample + k * hop);
     }
     TakeFeatures {
@@ -176,7 +171,7 @@ pub(super) fn take_features(
         early_energy,
         mean_frame: mean,
         mean_frames: count,
-        later_features,
+        later_power,
         later_energy,
     }
 }
@@ -354,7 +349,7 @@ mod tests {
         let t = take_features(&mut analyzer, &take, 5, 0);
         let norm: f32 = t.features.iter().map(|v| v * v).sum::<f32>().sqrt();
         assert!((norm - 1.0).abs() < 1e-4, "{norm}");
-        assert_eq!(t.later_features.len(), t.later_energy.len() * FEATURES);
+        assert_eq!(t.later_power.len(), t.later_energy.len() * BANDS);
         // Frames whose window lies in the take after the first, give or take one.
         let expected = (take.len() - analyzer.win) / hop;
         assert!(

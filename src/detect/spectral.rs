@@ -379,7 +379,7 @@ impl SpectralMatcher {
                         early_energy,
                         mean_frame,
                         mean_frames,
-                        later_features,
+                        later_power,
                         later_energy,
                     } = take_features(&mut analyzer, &take.samples, decision_frames, start);
                     templates.push(Template {
@@ -390,7 +390,7 @@ impl SpectralMatcher {
                         drawn_towards: None,
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
-                        later_features,
+                        later_power,
                         later_energy,
                     });
                     // The held spectrum is taken from the later start.
@@ -971,8 +971,8 @@ impl SpectralMatcher {
 
     /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
     /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
-    /// onset (give or take `CONTINUATION_SLACK_SECONDS`), sounds alike (similarity at
-    /// least `CONTINUATION_SIMILARITY`) at the level the impulse's strength predicts
+    /// onset (give or take `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room,
+    /// sounds alike (similarity at least `CONTINUATION_SIMILARITY`) at the level the impulse's strength predicts
     /// (within `CONTINUATION_DB`).
     fn continues_last_impulse(&mut self, time_sample: u64, onset_frame: u64) -> bool {
         let Some(last) = self.last_impulse else {
@@ -985,11 +985,18 @@ impl SpectralMatcher {
             return false;
         }
         self.pool_instance(onset_frame);
+        self.room.set(self.onsets.band_floors());
+        self.room.hear(&self.instance_power);
         let template = &self.templates[last.template];
         let energy = self.decision_window_energy(time_sample);
         for k in after.saturating_sub(slack).max(1)..=(after + slack).min(count) {
-            let features = &template.later_features[(k - 1) * FEATURES..k * FEATURES];
-            let similarity = similarity(features, &self.instance);
+            self.room.take(
+                &template.later_power[(k - 1) * BANDS..k * BANDS],
+                None,
+                &self.analyzer.cepstrum,
+                &mut self.heard_take,
+            );
+            let similarity = similarity(&self.heard_take, &self.instance);
             let expected = template.later_energy[k - 1] * last.strength * last.strength;
             let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
             if similarity >= CONTINUATION_SIMILARITY && db.abs() <= CONTINUATION_DB {
