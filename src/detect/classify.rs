@@ -13,6 +13,10 @@
 
 use super::features::{features_of_power, scale_to_unit, Analyzer};
 use super::onset::{OnsetDetector, OnsetParams};
+use super::white_noise;
+
+/// Seed of the calibration's noise.
+const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// Steady noise this long, after as long again to settle, measures how far the onset
 /// stage's floors lie under the noise's mean power ([`noise_over_floor`]).
@@ -35,25 +39,15 @@ pub(super) fn noise_over_floor(
     let (win, hop) = (analyzer.win, analyzer.hop);
     let mut onsets = OnsetDetector::new(params, &bins, win, hop, rate);
     let settle = (CALIBRATION_SECONDS * rate) as usize;
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let noise: Vec<f32> = (0..2 * settle + win)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-        })
-        .collect();
+    let noise = white_noise(2 * settle + win, 0.5, NOISE_SEED);
     let mut frame = vec![0.0f32; bands];
-    let mut power = vec![0.0f32; bands];
     let (mut mean, mut floor) = (vec![0.0f64; bands], vec![0.0f64; bands]);
     for start in (0..=2 * settle).step_by(hop) {
         analyzer.frame(&noise[start..start + win], &mut frame);
-        power.copy_from_slice(&analyzer.power);
-        onsets.push(&power);
+        onsets.push(&analyzer.power);
         if start >= settle {
             for b in 0..bands {
-                mean[b] += f64::from(power[b]);
+                mean[b] += f64::from(analyzer.power[b]);
                 floor[b] += f64::from(onsets.band_floors()[b]);
             }
         }
@@ -146,18 +140,6 @@ mod tests {
 
     const RATE: f64 = 22_050.0;
 
-    fn noise(n: usize, seed: u64) -> Vec<f32> {
-        let mut state = seed | 1;
-        (0..n)
-            .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-            })
-            .collect()
-    }
-
     #[test]
     fn the_floor_lies_under_the_noise_the_more_the_narrower_the_band() {
         let mut analyzer = Analyzer::new(RATE);
@@ -212,12 +194,12 @@ mod tests {
         let n = 4096;
         let take = buzz(n);
         // The same sound in a room whose hiss fills the bands it leaves empty.
-        let hiss: Vec<f32> = noise(n, 5).iter().map(|x| x * 0.05).collect();
+        let hiss = white_noise(n, 0.025, 5);
         let copy: Vec<f32> = take.iter().zip(&hiss).map(|(a, b)| a + b).collect();
         let take_power = pooled(&mut analyzer, &take, 0, 8);
         let copy_power = pooled(&mut analyzer, &copy, 0, 8);
         // The room's floors, as the onset stage keeps them over a second of its noise.
-        let before: Vec<f32> = noise(RATE as usize, 6).iter().map(|x| x * 0.05).collect();
+        let before = white_noise(RATE as usize, 0.025, 6);
         let (win, hop) = (analyzer.win, analyzer.hop);
         let mut onsets = OnsetDetector::new(
             OnsetParams::default(),
@@ -229,8 +211,7 @@ mod tests {
         let mut frame = vec![0.0f32; BANDS];
         for start in (0..before.len() - win).step_by(hop) {
             analyzer.frame(&before[start..start + win], &mut frame);
-            let power = analyzer.power.clone();
-            onsets.push(&power);
+            onsets.push(&analyzer.power);
         }
         let floors = onsets.band_floors().to_vec();
         let features = |power: &[f32]| {

@@ -10,7 +10,11 @@ use super::features::{
 use super::spectral::{
     first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_ABOVE_FLOOR_DB, ONSET_RANGE_DB,
 };
+use super::white_noise;
 use crate::config::{DetectorSettings, PatternKind};
+
+/// Seed of the probe's noise.
+const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
 
 pub(super) struct Template {
     pub(super) pattern: usize,
@@ -232,15 +236,7 @@ fn probe_onset(
     let lead = (0.3 * rate) as usize;
     // Uniform in ±a has power a²/3.
     let amplitude = (3.0 * noise_power).sqrt();
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let noise: Vec<f32> = (0..lead)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
-        })
-        .collect();
+    let noise = white_noise(lead, amplitude, NOISE_SEED);
     let mut probe = SpectralMatcher::new(Vec::new(), settings);
     let mut no_events = Vec::new();
     probe.push(&noise, &mut no_events);

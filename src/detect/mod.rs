@@ -30,6 +30,21 @@ pub use gates::Outcome;
 pub use spectral::{OnsetRecord, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
+/// `n` samples of white noise, uniform in ±`amplitude` (power amplitude² / 3), from a
+/// xorshift generator seeded with `seed`: the same every run. For the stages' own
+/// probes (a take's onset after noise, the onset floors' calibration) and their tests.
+pub(crate) fn white_noise(n: usize, amplitude: f32, seed: u64) -> Vec<f32> {
+    let mut state = seed | 1;
+    (0..n)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
+        })
+        .collect()
+}
+
 /// The matcher a detector runs.
 enum Matcher {
     Waveform(Box<WaveformMatcher>),

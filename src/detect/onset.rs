@@ -310,17 +310,7 @@ mod tests {
         found
     }
 
-    fn noise(n: usize, amplitude: f32, seed: u64) -> Vec<f32> {
-        let mut state = seed | 1;
-        (0..n)
-            .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                ((state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * amplitude
-            })
-            .collect()
-    }
+    use crate::detect::white_noise as noise;
 
     /// Decaying noise bursts 30 ms long at `times` (s), each `burst` in amplitude, over
     /// noise of amplitude `floor`, `seconds` long.
