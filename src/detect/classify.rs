@@ -14,6 +14,7 @@
 use super::features::{features_of_power, scale_to_unit, Analyzer};
 use super::onset::{OnsetDetector, OnsetParams};
 use super::white_noise;
+use std::sync::Mutex;
 
 /// Seed of the calibration's noise.
 const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -56,6 +57,21 @@ pub(super) fn noise_over_floor(
         .zip(&floor)
         .map(|(m, f)| if *f > 0.0 { (m / f) as f32 } else { 1.0 })
         .collect()
+}
+
+/// [`noise_over_floor`] of the default onset stage at `rate`, measured once per rate in a
+/// process: every detector built after the first (a reload, each take that `record`
+/// checks) reuses it. `analyzer` must analyse at `rate`.
+pub(super) fn default_noise_over_floor(analyzer: &mut Analyzer, rate: f64) -> Vec<f32> {
+    static MEASURED: Mutex<Vec<(u64, Vec<f32>)>> = Mutex::new(Vec::new());
+    // A panic while measuring leaves nothing half-written: the list is only pushed to.
+    let mut measured = MEASURED.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    if let Some((_, ratio)) = measured.iter().find(|(r, _)| *r == rate.to_bits()) {
+        return ratio.clone();
+    }
+    let ratio = noise_over_floor(analyzer, OnsetParams::default(), rate);
+    measured.push((rate.to_bits(), ratio.clone()));
+    ratio
 }
 
 /// The room an onset is heard in, set per onset ([`Room::set`]) and per pooled window

@@ -1,6 +1,7 @@
 //! The pitch stage: the fundamental frequency of a held voiced sound, by normalised
 //! autocorrelation over the middle of its samples. Runs on the detector thread when a
-//! held sound ends; the correlation buffer is made once, so it allocates nothing.
+//! held sound ends; its buffers (the samples correlated, a correlation per lag) are made
+//! once, so it allocates nothing.
 
 const PITCH_MIN_HZ: f64 = 60.0;
 const PITCH_MAX_HZ: f64 = 500.0;
@@ -13,14 +14,18 @@ pub(super) struct PitchEstimator {
     rate: f64,
     /// Correlation per lag (lags `min - 1 ..= max + 1`).
     by_lag: Vec<f64>,
+    /// The samples correlated, copied out of the caller's ring once.
+    window: Vec<f64>,
 }
 
 impl PitchEstimator {
     pub(super) fn new(rate: f64) -> Self {
         let lags = ((rate / PITCH_MIN_HZ).ceil() - (rate / PITCH_MAX_HZ).floor()) as usize + 3;
+        let longest = (PITCH_WINDOW_SECONDS * rate) as usize + (rate / PITCH_MIN_HZ).ceil() as usize + 2;
         Self {
             rate,
             by_lag: vec![0.0; lags],
+            window: vec![0.0; longest],
         }
     }
 
@@ -42,10 +47,16 @@ impl PitchEstimator {
             return None;
         }
         let start = lo + (span - len - max_lag) / 2;
+        let (len, max_lag) = (len as usize, max_lag as usize);
+        let window = &mut self.window[..len + max_lag + 1];
+        for (w, n) in window.iter_mut().zip(start..) {
+            *w = f64::from(sample(n));
+        }
+        let window = &*window;
         let correlation = |lag: u64| {
             let (mut xy, mut xx, mut yy) = (0.0f64, 0.0f64, 0.0f64);
-            for n in start..start + len {
-                let (x, y) = (f64::from(sample(n)), f64::from(sample(n + lag)));
+            let lag = lag as usize;
+            for (&x, &y) in window[..len].iter().zip(&window[lag..lag + len]) {
                 xy += x * y;
                 xx += x * x;
                 yy += y * y;
@@ -56,7 +67,7 @@ impl PitchEstimator {
                 0.0
             }
         };
-        for (slot, lag) in self.by_lag.iter_mut().zip(min_lag - 1..=max_lag + 1) {
+        for (slot, lag) in self.by_lag.iter_mut().zip(min_lag - 1..=max_lag as u64 + 1) {
             *slot = correlation(lag);
         }
         pitch_from_correlations(&self.by_lag, min_lag, self.rate)

@@ -54,7 +54,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::background::BackgroundModel;
-use super::classify::{noise_over_floor, Room};
+use super::classify::{default_noise_over_floor, Room};
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets, TakeFeatures,
     Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
@@ -427,7 +427,7 @@ impl SpectralMatcher {
         let noise_over_floor = if templates.is_empty() {
             vec![1.0; BANDS]
         } else {
-            noise_over_floor(&mut analyzer, OnsetParams::default(), rate)
+            default_noise_over_floor(&mut analyzer, rate)
         };
         Self {
             rate,
@@ -556,7 +556,8 @@ impl SpectralMatcher {
     }
 
     fn sample(&self, n: u64) -> f32 {
-        self.samples[(n % self.samples.len() as u64) as usize]
+        // The ring is a power of two long: a mask, not a division, per sample.
+        self.samples[(n & (self.samples.len() as u64 - 1)) as usize]
     }
 
     pub fn push(&mut self, samples: &[f32], out: &mut Vec<Event>) {
@@ -564,8 +565,8 @@ impl SpectralMatcher {
             return;
         }
         for &x in samples {
-            let cap = self.samples.len() as u64;
-            self.samples[(self.consumed % cap) as usize] = x;
+            let mask = self.samples.len() as u64 - 1;
+            self.samples[(self.consumed & mask) as usize] = x;
             self.consumed += 1;
             self.since_frame += 1;
             if self.since_frame == self.hop() && self.consumed >= self.analyzer.win as u64 {
@@ -1108,8 +1109,8 @@ impl SpectralMatcher {
         // Mean power over the held sound (its most recent half second when longer).
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
-        let (samples, len) = (&self.samples, self.samples.len() as u64);
-        let pitch = self.pitch.estimate(lo, hi, |n| samples[(n % len) as usize]);
+        let (samples, mask) = (&self.samples, self.samples.len() as u64 - 1);
+        let pitch = self.pitch.estimate(lo, hi, |n| samples[(n & mask) as usize]);
         let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
