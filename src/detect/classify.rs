@@ -65,7 +65,9 @@ pub(super) fn noise_over_floor(
 pub(super) fn default_noise_over_floor(analyzer: &mut Analyzer, rate: f64) -> Vec<f32> {
     static MEASURED: Mutex<Vec<(u64, Vec<f32>)>> = Mutex::new(Vec::new());
     // A panic while measuring leaves nothing half-written: the list is only pushed to.
-    let mut measured = MEASURED.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let mut measured = MEASURED
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     if let Some((_, ratio)) = measured.iter().find(|(r, _)| *r == rate.to_bits()) {
         return ratio.clone();
     }

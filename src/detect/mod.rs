@@ -14,6 +14,7 @@ mod enrol;
 mod envelope;
 mod features;
 pub mod gates;
+mod held;
 pub mod onset;
 mod pitch;
 pub mod spectral;

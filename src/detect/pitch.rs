@@ -21,7 +21,8 @@ pub(super) struct PitchEstimator {
 impl PitchEstimator {
     pub(super) fn new(rate: f64) -> Self {
         let lags = ((rate / PITCH_MIN_HZ).ceil() - (rate / PITCH_MAX_HZ).floor()) as usize + 3;
-        let longest = (PITCH_WINDOW_SECONDS * rate) as usize + (rate / PITCH_MIN_HZ).ceil() as usize + 2;
+        let longest =
+            (PITCH_WINDOW_SECONDS * rate) as usize + (rate / PITCH_MIN_HZ).ceil() as usize + 2;
         Self {
             rate,
             by_lag: vec![0.0; lags],

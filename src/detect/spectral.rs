@@ -40,11 +40,10 @@
 //! covers its take's length, longer while its sound goes on; a held sound, until its
 //! end.
 //!
-//! Continuous patterns: after an onset classified as one, the event is held while each
-//! frame still resembles the pattern's sustained spectrum (its mean frame after the
-//! onset, Pearson ≥ the continuous threshold, and ≥ 0.5) and stays within 20 dB of the
-//! event's loudest frame; it ends after 30 ms of frames that do not. A voiced held sound also
-//! reports its pitch (normalised autocorrelation over 100 ms of its middle, 60-500 Hz).
+//! Continuous patterns: after an onset classified as one, the held stage
+//! ([`super::held`]) follows the sound frame by frame (while it still resembles the
+//! pattern's sustained spectrum, its mean frame after the takes' onsets) and says when
+//! it ended. A voiced held sound also reports its pitch ([`super::pitch`]).
 //!
 //! Runs on the detector thread. FFT plan, mel bank, rings and templates are made in
 //! [`SpectralMatcher::new`]; `push` allocates nothing.
@@ -64,6 +63,7 @@ use super::features::{
     HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
+use super::held::{Held, HeldParams, HeldStage, SOUND_DROP_DB};
 use super::onset::{OnsetDetector, OnsetParams};
 use super::pitch::PitchEstimator;
 use super::Event;
@@ -91,14 +91,6 @@ const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 /// (which suits spoken words with a soft first consonant) falls into breath and room
 /// noise before the hit and costs a third of the F1.
 pub(super) const ONSET_RANGE_DB: f64 = 12.0;
-const HOLD_DROP_DB: f32 = 20.0;
-const HOLD_GAP_SECONDS: f64 = 0.030;
-/// A held sound's frames must resemble its pattern's sustained spectrum at least this
-/// much (or the pattern's `continuous_threshold`, when higher). Lower, speech holds a
-/// sung "hooo" through whole words: on the paragraph of `scripts/eval-speech.sh` a
-/// "hooo" held over "The morning" for 0.58 s at 0.3, hiding the speech after it from
-/// the speech guard (3 false events in 48 s at 0.3, 2 at 0.5).
-const HELD_MIN_SIMILARITY: f32 = 0.5;
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
 
@@ -119,15 +111,6 @@ struct PendingOnset {
     detected: u64,
     /// Once placed: the onset sample and the frame centred on it.
     placed: Option<(u64, u64)>,
-}
-
-#[derive(Clone, Copy)]
-struct Held {
-    pattern: usize,
-    begin_sample: u64,
-    loudest_db: f32,
-    last_good_frame: u64,
-    score: f32,
 }
 
 /// Onset times (seconds, each at the centre of the frame where the onset function
@@ -202,7 +185,7 @@ pub struct SpectralMatcher {
     /// The broadband level of the room: follows quieter frames at once, rises slowly.
     noise_floor_db: f32,
     pending: Vec<PendingOnset>,
-    held: Option<Held>,
+    held: HeldStage,
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
@@ -316,7 +299,7 @@ const CONTINUATION_DB: f64 = 6.0;
 const RECOGNISED_SPANS: usize = 8;
 
 /// A recognised impulse covers its take's length from its onset, and longer while its
-/// sound stays within `HOLD_DROP_DB` of its peak (said more slowly than enrolled), up to
+/// sound stays within `SOUND_DROP_DB` of its peak (said more slowly than enrolled), up to
 /// this many times the take's length.
 const SPAN_STRETCH: u64 = 2;
 
@@ -450,7 +433,7 @@ impl SpectralMatcher {
             ),
             noise_floor_db: 0.0,
             pending: Vec::with_capacity(16),
-            held: None,
+            held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
@@ -550,11 +533,6 @@ impl SpectralMatcher {
         f as i64 * self.hop() as i64
     }
 
-    fn frame(&self, f: u64) -> &[f32] {
-        let slot = (f % self.frame_capacity as u64) as usize;
-        &self.frames[slot * BANDS..(slot + 1) * BANDS]
-    }
-
     fn sample(&self, n: u64) -> f32 {
         // The ring is a power of two long: a mask, not a division, per sample.
         self.samples[(n & (self.samples.len() as u64 - 1)) as usize]
@@ -585,7 +563,7 @@ impl SpectralMatcher {
         // Enough silence for pending decisions and a held sound's end.
         let pad = (self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 4) * self.hop()
             + self.analyzer.win
-            + (HOLD_GAP_SECONDS * self.rate) as usize;
+            + (self.held.params().gap_seconds * self.rate) as usize;
         let end = self.consumed;
         const ZEROS: [f32; 256] = [0.0; 256];
         let mut left = pad;
@@ -594,7 +572,7 @@ impl SpectralMatcher {
             self.push(&ZEROS[..n], out);
             left -= n;
         }
-        if let Some(h) = self.held.take() {
+        if let Some(h) = self.held.end() {
             self.close_held(h, out);
         }
         self.finished = true;
@@ -723,7 +701,7 @@ impl SpectralMatcher {
             best_score,
             threshold: self.patterns[pi].threshold,
             background_score: self.background_score,
-            held_by_best_pattern: self.held.is_some_and(|h| h.pattern == pi),
+            held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
             strength,
         };
         let outcome = decide(&evidence, &self.gates);
@@ -805,19 +783,16 @@ impl SpectralMatcher {
             strength,
         });
         if info.kind == PatternKind::Continuous {
-            if let Some(h) = self.held.take() {
-                self.close_held(h, out);
-            }
             let loudest = (onset_frame..self.frame_count)
                 .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
                 .fold(f32::NEG_INFINITY, f32::max);
-            self.held = Some(Held {
-                pattern: pi,
-                begin_sample: time_sample,
-                loudest_db: loudest,
-                last_good_frame: self.frame_count - 1,
-                score: best_score,
-            });
+            let newest = self.frame_count - 1;
+            if let Some(h) = self
+                .held
+                .begin(pi, time_sample, best_score, loudest, newest)
+            {
+                self.close_held(h, out);
+            }
         } else {
             self.track(pi);
         }
@@ -1025,7 +1000,7 @@ impl SpectralMatcher {
         let Some(mut e) = self.extending else { return };
         let level = self.levels[(f % self.frame_capacity as u64) as usize];
         let centre = f * self.hop() as u64 + self.analyzer.win as u64 / 2;
-        if level < e.peak_db - HOLD_DROP_DB || centre > e.limit {
+        if level < e.peak_db - SOUND_DROP_DB || centre > e.limit {
             self.extending = None;
             return;
         }
@@ -1063,37 +1038,28 @@ impl SpectralMatcher {
             >= needed
     }
 
+    /// Feeds frame `f` to the held stage; turns the held sound it ends into an event.
     fn follow_held(&mut self, f: u64, out: &mut Vec<Event>) {
-        let Some(mut h) = self.held else { return };
-        let info = &self.patterns[h.pattern];
-        let level = self.levels[(f % self.frame_capacity as u64) as usize];
-        let frame = self.frame(f);
-        let mean = frame.iter().sum::<f32>() / BANDS as f32;
-        let mut norm = 0.0f32;
-        let mut dot = 0.0f32;
-        for (x, s) in frame.iter().zip(&info.sustain) {
-            let c = x - mean;
-            norm += c * c;
-            dot += c * s;
-        }
-        let similarity = if norm > 1e-9 { dot / norm.sqrt() } else { 0.0 };
-        h.loudest_db = h.loudest_db.max(level);
-        let good = similarity >= info.continuous_threshold.max(HELD_MIN_SIMILARITY)
-            && level >= h.loudest_db - HOLD_DROP_DB;
-        if good {
-            h.last_good_frame = f;
-        }
-        let gap = (HOLD_GAP_SECONDS / HOP_SECONDS) as u64;
-        self.held = Some(h);
-        if f > h.last_good_frame + gap {
-            self.held = None;
+        let Some(pattern) = self.held.current().map(|h| h.pattern) else {
+            return;
+        };
+        let slot = (f % self.frame_capacity as u64) as usize;
+        let info = &self.patterns[pattern];
+        let ended = self.held.follow(
+            f,
+            &self.frames[slot * BANDS..(slot + 1) * BANDS],
+            self.levels[slot],
+            &info.sustain,
+            info.continuous_threshold,
+        );
+        if let Some(h) = ended {
             self.close_held(h, out);
         }
     }
 
     fn close_held(&mut self, h: Held, out: &mut Vec<Event>) {
         // The sound ends at the end of the last matching frame's centre hop.
-        let end_sample = (self.frame_start(h.last_good_frame)
+        let end_sample = (self.frame_start(h.last_good_frame())
             + self.analyzer.win as i64 / 2
             + self.hop() as i64 / 2)
             .max(h.begin_sample as i64 + 1) as u64;
@@ -1110,7 +1076,9 @@ impl SpectralMatcher {
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
         let (samples, mask) = (&self.samples, self.samples.len() as u64 - 1);
-        let pitch = self.pitch.estimate(lo, hi, |n| samples[(n & mask) as usize]);
+        let pitch = self
+            .pitch
+            .estimate(lo, hi, |n| samples[(n & mask) as usize]);
         let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
