@@ -229,6 +229,17 @@ pub(crate) const RESAMPLER_CHUNK: usize = 64;
 /// Length of the resampler's windowed-sinc filter. Its delay, half of it, is removed
 /// from the output; 128 taps cost about 1.5 ms of latency at 44.1 kHz.
 pub(crate) const RESAMPLER_SINC_LEN: usize = 128;
+/// The window of the resampler's sinc filter.
+const RESAMPLER_WINDOW: WindowFunction = WindowFunction::BlackmanHarris2;
+
+/// The part of the output's band, from 0 Hz up to this fraction of its Nyquist
+/// frequency, that the resampler passes unchanged. rubato places the filter's cutoff
+/// so that its transition band, centred on the cutoff, ends at the Nyquist frequency:
+/// the passband ends as far below the cutoff, at twice the cutoff less one (0.789 of
+/// the Nyquist frequency for 128 taps of Blackman-Harris).
+pub(crate) fn resampler_passband() -> f64 {
+    2.0 * rubato::calculate_cutoff::<f64>(RESAMPLER_SINC_LEN, RESAMPLER_WINDOW) - 1.0
+}
 
 /// A windowed-sinc resampler (rubato) fed with blocks of any size. Input is collected
 /// into fixed chunks, so the output is the same whatever the block sizes; the resampler's
@@ -247,8 +258,7 @@ pub struct StreamResampler {
 
 impl StreamResampler {
     pub fn new(from: u32, to: u32) -> Result<Self, AudioError> {
-        let parameters =
-            SincInterpolationParameters::new(RESAMPLER_SINC_LEN, WindowFunction::BlackmanHarris2);
+        let parameters = SincInterpolationParameters::new(RESAMPLER_SINC_LEN, RESAMPLER_WINDOW);
         let inner = Async::<f32>::new_sinc(
             f64::from(to) / f64::from(from),
             1.0,

@@ -678,7 +678,6 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
 /// noise: onset F1 0.29). Here the hits, 18-24 dB under full scale (as quiet as real
 /// takes often are) with 30-120 ms between them, sit in noise 40 dB under full scale.
 #[test]
-#[ignore = "open: F1 0.84 (seed 7): onset F1 0.97 (3 of 60 hits have no onset), and 8 of the 57 that fire get another pattern's label"]
 fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
     let settings = spectral();
     // Enrolled at the level they are performed at.
