@@ -7,9 +7,7 @@
 use super::features::{
     features_of_power, pool_power, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS,
 };
-use super::spectral::{
-    first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_ABOVE_FLOOR_DB, ONSET_RANGE_DB,
-};
+use super::spectral::{first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_RANGE_DB};
 use super::white_noise;
 use crate::config::{DetectorSettings, PatternKind};
 
@@ -179,6 +177,10 @@ pub(super) fn take_features(
         later_energy,
     }
 }
+
+/// Enrolment's quiet room lies this far (dB) under a take's quietest 5 ms, so that
+/// every part of the take stands out of its noise (`take_onsets`).
+const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 
 /// Where a stream places a take's onset, in samples: the take is run through the
 /// stream's own stages (onset detection and placement) after 0.3 s of noise, and the
