@@ -13,11 +13,8 @@
 
 use super::features::{features_of_power, scale_to_unit, Analyzer};
 use super::onset::{OnsetDetector, OnsetParams};
-use super::white_noise;
+use super::{white_noise, NOISE_SEED};
 use std::sync::Mutex;
-
-/// Seed of the calibration's noise.
-const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// Steady noise this long, after as long again to settle, measures how far the onset
 /// stage's floors lie under the noise's mean power ([`noise_over_floor`]).

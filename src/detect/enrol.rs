@@ -8,11 +8,8 @@ use super::features::{
     features_of_power, pool_power, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS,
 };
 use super::spectral::{first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_RANGE_DB};
-use super::white_noise;
+use super::{white_noise, NOISE_SEED};
 use crate::config::{DetectorSettings, PatternKind};
-
-/// Seed of the probe's noise.
-const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
 
 pub(super) struct Template {
     pub(super) pattern: usize,
@@ -136,19 +133,16 @@ pub(super) fn take_features(
             power,
         )
     };
-    let mut pooled_power = vec![0.0f32; BANDS];
-    let pooled_from = |first: usize, power: &mut [f32], out: &mut [f32]| {
-        power_from(first, power);
-        features_of_power(power, &analyzer.cepstrum, out);
-    };
     let energy_from = |start: usize| -> f64 {
         padded[start.min(padded.len())..(start + early_len).min(padded.len())]
             .iter()
             .map(|&x| f64::from(x) * f64::from(x))
             .sum()
     };
+    let mut pooled_power = vec![0.0f32; BANDS];
+    power_from(onset, &mut pooled_power);
     let mut features = vec![0.0f32; FEATURES];
-    pooled_from(onset, &mut pooled_power, &mut features);
+    features_of_power(&pooled_power, &analyzer.cepstrum, &mut features);
     let early_energy = energy_from(onset_sample);
     let take_frames_end = ((lead + take.len()).saturating_sub(win) / hop)
         .max(onset + 1)

@@ -31,6 +31,9 @@ pub use gates::Outcome;
 pub use spectral::{OnsetRecord, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
+/// The seed of the stages' own noise ([`white_noise`]).
+pub(crate) const NOISE_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
+
 /// `n` samples of white noise, uniform in ±`amplitude` (power amplitude² / 3), from a
 /// xorshift generator seeded with `seed`: the same every run. For the stages' own
 /// probes (a take's onset after noise, the onset floors' calibration) and their tests.

@@ -157,6 +157,12 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
     BackgroundModel::new(FEATURES, matcher.decision_frames, templates)
 }
 
+/// Where stream sample `n` lies in the sample ring. The ring is a power of two long:
+/// a mask, not a division, per sample.
+fn ring_slot(ring: &[f32], n: u64) -> usize {
+    (n & (ring.len() as u64 - 1)) as usize
+}
+
 /// The level of a frame without sound, dB.
 const SILENT_DB: f32 = -120.0;
 
@@ -532,8 +538,7 @@ impl SpectralMatcher {
     }
 
     fn sample(&self, n: u64) -> f32 {
-        // The ring is a power of two long: a mask, not a division, per sample.
-        self.samples[(n & (self.samples.len() as u64 - 1)) as usize]
+        self.samples[ring_slot(&self.samples, n)]
     }
 
     pub fn push(&mut self, samples: &[f32], out: &mut Vec<Event>) {
@@ -541,8 +546,8 @@ impl SpectralMatcher {
             return;
         }
         for &x in samples {
-            let mask = self.samples.len() as u64 - 1;
-            self.samples[(self.consumed & mask) as usize] = x;
+            let slot = ring_slot(&self.samples, self.consumed);
+            self.samples[slot] = x;
             self.consumed += 1;
             self.since_frame += 1;
             if self.since_frame == self.hop() && self.consumed >= self.analyzer.win as u64 {
@@ -1072,10 +1077,10 @@ impl SpectralMatcher {
         // Mean power over the held sound (its most recent half second when longer).
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
-        let (samples, mask) = (&self.samples, self.samples.len() as u64 - 1);
+        let samples = &self.samples;
         let pitch = self
             .pitch
-            .estimate(lo, hi, |n| samples[(n & mask) as usize]);
+            .estimate(lo, hi, |n| samples[ring_slot(samples, n)]);
         let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
