@@ -165,10 +165,9 @@ pub(super) const FEATURES: usize = BANDS;
 /// the similarity is the Pearson correlation of the pooled dB spectra, which the broad
 /// tilt of a spectrum (more bass or more hiss) dominates; a higher power weighs the
 /// finer shape (where the resonances of the mouth lie), which tells look-alike hits
-/// apart. On the real recordings of `examples/eval_beatbox.rs` (threshold 0.3, with
-/// tracking), F1 of rec6 / the repeated set: 0.43 / 0.84 at 0, 0.50 / 0.88 at 0.3,
-/// 0.71 / 0.93 at 0.5, 0.64 / 0.91 at 0.7 (rec3 falls from 0.94 to 0.88), 0.64 / 0.62
-/// at 1. Scores are lower than plain correlations: hence the method's threshold.
+/// apart, up to a point: the mean F1 over every dev set peaks at 0.5 and falls on
+/// either side (`docs/classify.md`). Scores are lower than plain correlations: hence
+/// the method's threshold.
 const LIFTER_POWER: f32 = 0.5;
 
 /// The DCT-II rows that turn a pooled dB spectrum into weighted cepstral coefficients

@@ -886,13 +886,12 @@ impl SpectralMatcher {
     /// `TRACK_CONFIDENCE` over its threshold and `TRACK_MARGIN` over every other
     /// pattern) becomes it the first time, and then moves it by `TRACK_RATE` towards
     /// itself. The takes stay as enrolled, and every pattern has one tracked template
-    /// however many takes it has, so no pattern gains weight by being heard more. On
-    /// the real recordings of `examples/eval_beatbox.rs` (threshold 0.3) it raised the
-    /// F1 of the repeated set from 0.80 to 0.93, of rec3 (enrolled from rec2, another
-    /// session) from 0.89 to 0.94 and of rec6 from 0.54 to 0.71, and cost the isolated
-    /// set at 30-120 ms gaps one label (1.000 to 0.986). A new template from every
-    /// confident instance instead (up to 8 per pattern) cost that set 0.07-0.09
-    /// (measured with plain correlations, before `LIFTER_POWER`).
+    /// however many takes it has, so no pattern gains weight by being heard more. The
+    /// rate and the confidence are swept over every dev set in `docs/classify.md`
+    /// (without tracking the mean F1 falls by 0.034, most of it on real hits). A new
+    /// template from every confident instance instead (up to 8 per pattern) cost the
+    /// real isolated hits 0.07-0.09 when it was tried (with plain correlations, before
+    /// `LIFTER_POWER`).
     fn track(&mut self, pi: usize) {
         let best = self.pattern_scores[pi].score;
         let second = self
