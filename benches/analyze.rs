@@ -134,6 +134,11 @@ fn bench_spectral(c: &mut Criterion) {
             })
         });
     }
+    // What every run above pays before its first sample: enrolling the patterns.
+    let pats = patterns(&bank, 8, &settings);
+    group.bench_function(BenchmarkId::new("build_patterns", 8), |b| {
+        b.iter(|| black_box(Detector::new(pats.clone(), &settings, RATE).unwrap()))
+    });
     group.finish();
 }
 

@@ -6,7 +6,9 @@
 
 use super::features::{
     features_of_power, pool_power, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS,
+    WINDOW_SECONDS,
 };
+use super::onset::OnsetParams;
 use super::spectral::{first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_RANGE_DB};
 use super::{white_noise, NOISE_SEED};
 use crate::config::{DetectorSettings, PatternKind};
@@ -179,7 +181,8 @@ pub(super) fn take_features(
 const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 
 /// Where a stream places a take's onset, in samples: the take is run through the
-/// stream's own stages (onset detection and placement) after 0.3 s of noise, and the
+/// stream's own stages (onset detection and placement) after [`probe_lead_seconds`] of
+/// noise, and the
 /// first onset placed on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest is
 /// its onset. Where that lies depends on the room: a spoken "pew" opens with a "p" 20
 /// dB below its vowel, found in a quiet room and lost in the noise of a loud one. So
@@ -218,7 +221,7 @@ pub(super) fn take_onsets(
     (first, second)
 }
 
-/// The first onset a stream places on `take` after 0.3 s of white noise of power
+/// The first onset a stream places on `take` after [`probe_lead_seconds`] of white noise of power
 /// `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest;
 /// samples from the take's start. `powers` are the take's mean powers over blocks of
 /// `block` samples.
@@ -231,7 +234,7 @@ fn probe_onset(
 ) -> Option<usize> {
     let rate = f64::from(settings.sample_rate);
     let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
-    let lead = (0.3 * rate) as usize;
+    let lead = (probe_lead_seconds() * rate) as usize;
     // Uniform in ±a has power a²/3.
     let amplitude = (3.0 * noise_power).sqrt();
     let noise = white_noise(lead, amplitude, NOISE_SEED);
@@ -256,6 +259,15 @@ fn probe_onset(
         .filter(|&at| at + early_slack >= lead)
         .map(|at| at.saturating_sub(lead))
         .find(|&at| at < take.len() && power_at(at) >= wanted)
+}
+
+/// The noise a take is streamed after, seconds: the onset stage's longest memory for
+/// a first onset (its recent mean, `OnsetParams::mean_seconds`) and a frame's window,
+/// so that the take's first onset is judged against the noise alone. 0.3 s, as it
+/// was, gives the same table on every dev set (two strengths of D3 differ) and makes
+/// building a detector half as slow again (README, Performance).
+fn probe_lead_seconds() -> f64 {
+    OnsetParams::default().mean_seconds + WINDOW_SECONDS
 }
 
 /// A held sound's soft start: sound within this many dB of its loudest...
