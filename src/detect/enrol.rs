@@ -182,9 +182,8 @@ const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 
 /// Where a stream places a take's onset, in samples: the take is run through the
 /// stream's own stages (onset detection and placement) after [`probe_lead_seconds`] of
-/// noise, and the
-/// first onset placed on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest is
-/// its onset. Where that lies depends on the room: a spoken "pew" opens with a "p" 20
+/// noise, and the first onset placed on sound within `TAKE_ONSET_RANGE_DB` of the
+/// take's loudest is its onset. Where that lies depends on the room: a spoken "pew" opens with a "p" 20
 /// dB below its vowel, found in a quiet room and lost in the noise of a loud one. So
 /// it is placed twice: in the loudest room the take allows (noise at the power of its
 /// quietest 5 ms, which is sound, as takes are cut close), and in one quiet enough for
@@ -221,9 +220,9 @@ pub(super) fn take_onsets(
     (first, second)
 }
 
-/// The first onset a stream places on `take` after [`probe_lead_seconds`] of white noise of power
-/// `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest;
-/// samples from the take's start. `powers` are the take's mean powers over blocks of
+/// The first onset a stream places on `take` after [`probe_lead_seconds`] of white
+/// noise of power `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's
+/// loudest; samples from the take's start. `powers` are the take's mean powers over blocks of
 /// `block` samples.
 fn probe_onset(
     take: &[f32],
@@ -264,8 +263,8 @@ fn probe_onset(
 /// The noise a take is streamed after, seconds: the onset stage's longest memory for
 /// a first onset (its recent mean, `OnsetParams::mean_seconds`) and a frame's window,
 /// so that the take's first onset is judged against the noise alone. 0.3 s, as it
-/// was, gives the same table on every dev set (two strengths of D3 differ) and makes
-/// building a detector half as slow again (README, Performance).
+/// was, gives the same table on every dev set (two strengths of D3 differ), and
+/// building a detector took half as long again (README, Performance).
 fn probe_lead_seconds() -> f64 {
     OnsetParams::default().mean_seconds + WINDOW_SECONDS
 }

@@ -890,8 +890,8 @@ impl SpectralMatcher {
     /// rate and the confidence are swept over every dev set in `docs/classify.md`
     /// (without tracking the mean F1 falls by 0.034, most of it on real hits). A new
     /// template from every confident instance instead (up to 8 per pattern) cost the
-    /// real isolated hits 0.07-0.09 when it was tried (with plain correlations, before
-    /// `LIFTER_POWER`).
+    /// isolated set of `examples/eval_beatbox.rs` at 30-120 ms gaps 0.07-0.09 when it
+    /// was tried (with plain correlations, before `LIFTER_POWER`).
     fn track(&mut self, pi: usize) {
         let best = self.pattern_scores[pi].score;
         let second = self
