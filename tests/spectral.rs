@@ -734,3 +734,54 @@ fn a_stream_a_few_samples_later_gives_the_same_events_as_many_samples_later() {
         }
     }
 }
+
+/// A snare whose attack opens with a faint tick `lead` seconds before its body.
+fn ticked_snare(lead: f64, seed: u64) -> Vec<f32> {
+    let mut s: Vec<f32> = noise_burst(RATE, 0.004, 0.002, seed)
+        .iter()
+        .map(|v| v * 0.03)
+        .collect();
+    s.resize(samples_for(lead, RATE), 0.0);
+    s.extend(snare(seed));
+    s
+}
+
+/// Two detections 20 ms apart can be placed on one attack (the first late in its
+/// search for the loudest part, the second early in its own): each sound is still one
+/// event, whatever the tick before its body.
+#[test]
+fn a_hit_is_one_event_whatever_comes_just_before_its_body() {
+    let settings = spectral();
+    let patterns = vec![
+        impulse("b", kick(1), &settings),
+        impulse("ts", hat(1), &settings),
+        impulse("k", ticked_snare(0.012, 1), &settings),
+    ];
+    let mut rng = Rng::new(3);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for i in 0..24u64 {
+        truth.push(Annotation {
+            onset: rec.len() as f64 / f64::from(RATE),
+            label: "k".into(),
+            end: None,
+        });
+        let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
+        let lead = 0.006 + 0.001 * (i % 13) as f64;
+        rec.extend(ticked_snare(lead, 100 + i).iter().map(|v| v * gain));
+        rec.extend(vec![0.0; samples_for(0.25, RATE)]);
+    }
+    add_noise(&mut rec, 0.001, 3);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    for pair in events.windows(2) {
+        assert!(
+            pair[1].time - pair[0].time >= 0.02,
+            "two events on one attack: {:?} and {:?}",
+            (pair[0].time, &pair[0].pattern),
+            (pair[1].time, &pair[1].pattern)
+        );
+    }
+    let s = score(&events, &truth, 0.05);
+    assert!(s.overall.f1 >= 0.95, "{}", onomato::eval::render_text(&s));
+}

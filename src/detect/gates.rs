@@ -26,6 +26,9 @@ pub enum Outcome {
     HeldContinues,
     /// Quieter than `min_strength` times the take.
     MinStrength,
+    /// Placed within the onset stage's shortest gap of the last onset that fired: the
+    /// same attack found twice (not scored).
+    SameOnset,
 }
 
 impl Outcome {
@@ -39,6 +42,7 @@ impl Outcome {
             Outcome::Background => "background",
             Outcome::HeldContinues => "held_continues",
             Outcome::MinStrength => "min_strength",
+            Outcome::SameOnset => "same_onset",
         }
     }
 }

@@ -211,6 +211,10 @@ pub struct SpectralMatcher {
     /// The first onsets placed (samples), kept for [`take_onsets`]'s look at a take.
     placed: [u64; PLACED_KEPT],
     placed_count: usize,
+    /// The last onset that fired (sample), and how near an onset may be placed to it:
+    /// the onset stage's `min_gap_seconds`.
+    last_fired: Option<u64>,
+    min_gap_samples: u64,
     /// The last impulse fired, whose take may still be going on.
     last_impulse: Option<FiredImpulse>,
     /// Per pattern, `FEATURES` each: the impulse as its user has lately made it (see
@@ -457,6 +461,8 @@ impl SpectralMatcher {
             },
             placed: [0; PLACED_KEPT],
             placed_count: 0,
+            last_fired: None,
+            min_gap_samples: (OnsetParams::default().min_gap_seconds * rate) as u64,
             last_impulse: None,
             tracked: vec![0.0; n_patterns * FEATURES],
             tracked_set: vec![false; n_patterns],
@@ -649,6 +655,17 @@ impl SpectralMatcher {
                     let frame = (time_sample.saturating_sub(self.analyzer.win as u64 / 2) as f64
                         / self.hop() as f64)
                         .round() as u64;
+                    // Two detections 20 ms apart can be placed on the same attack, the
+                    // first late in its search and the second early in its own: once
+                    // the first has fired, the second is that sound again.
+                    if self
+                        .last_fired
+                        .is_some_and(|last| time_sample < last + self.min_gap_samples)
+                    {
+                        self.pending.remove(0);
+                        self.explain_unscored(time_sample, Outcome::SameOnset);
+                        continue;
+                    }
                     self.pending[0].placed = Some((time_sample, frame));
                     if self.placed_count < PLACED_KEPT {
                         self.placed[self.placed_count] = time_sample;
@@ -663,6 +680,28 @@ impl SpectralMatcher {
             }
             self.pending.remove(0);
             self.classify(time_sample, frame, out);
+        }
+    }
+
+    /// Records an onset that was not scored, for `--explain`.
+    fn explain_unscored(&mut self, time_sample: u64, outcome: Outcome) {
+        let (time, decided_at) = (
+            time_sample as f64 / self.rate,
+            self.consumed as f64 / self.rate,
+        );
+        if let Some(records) = &mut self.explain {
+            records.push(OnsetRecord {
+                time,
+                decided_at,
+                best: None,
+                best_score: None,
+                second: None,
+                second_score: None,
+                strength: None,
+                background_score: None,
+                rise_db: None,
+                outcome,
+            });
         }
     }
 
@@ -752,6 +791,7 @@ impl SpectralMatcher {
         if outcome != Outcome::Fired {
             return;
         }
+        self.last_fired = Some(time_sample);
         let take_length = self.templates[best_template].length_after_onset;
         let info = &self.patterns[pi];
         // The impulse, or the begin marker of a held sound (the daemon sends it at
