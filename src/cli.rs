@@ -216,8 +216,8 @@ pub struct AnalyzeArgs {
     /// Spectral method: list every onset the detector considered, with the two patterns
     /// it resembled most, their scores, and what became of it and which stage decided
     /// (fired, quiet_before, speech_guard, continuation, below_threshold,
-    /// held_continues, min_strength, same_onset): a table on stderr, and an "onsets" array in the
-    /// JSON output.
+    /// held_continues, min_strength, same_onset): a table on stderr, and an "onsets"
+    /// array in the JSON output.
     #[arg(long)]
     pub explain: bool,
 }

@@ -122,6 +122,8 @@ pub struct OnsetDetector {
     floor_fall: f32,
     /// Per band: the noise floor (linear power).
     floor: Vec<f32>,
+    /// How far a band at its noise floor stands over the floor's own log, dB.
+    room_over_floor_db: f32,
     /// Ring of floored log spectra, `lag + 2` frames of `bands`.
     history: Vec<f32>,
     /// Ring of onset-function values, `mean_frames + 2`.
@@ -153,6 +155,7 @@ impl OnsetDetector {
             floor_rise: 10f32.powf(params.floor_rise_db_per_s * hop_seconds as f32 / 10.0),
             floor_fall: 10f32.powf(-params.floor_fall_db_per_s * hop_seconds as f32 / 10.0),
             floor: vec![0.0; bands],
+            room_over_floor_db: 10.0 * (1.0 + params.floor_weight).log10(),
             history: vec![0.0; (lag + 2) * bands],
             odf: vec![0.0; mean_frames + 2],
             frames: 0,
@@ -218,13 +221,11 @@ impl OnsetDetector {
             if g > start {
                 let trough = row(g);
                 above_room = 0.0;
-                // A band at its noise floor sits this far over the floor's own log.
-                let room = 10.0 * (1.0 + self.params.floor_weight).log10();
                 for (b, peak) in self.peak.iter_mut().enumerate() {
                     let level = self.history[trough + b];
                     *peak = peak.max(level);
                     fall += *peak - level;
-                    above_room += level - room - 10.0 * self.floor[b].log10();
+                    above_room += level - self.room_over_floor_db - 10.0 * self.floor[b].log10();
                 }
             }
             // A sound back within the onset threshold of the room's noise has ended,
@@ -277,7 +278,6 @@ impl OnsetDetector {
         }
         self.last_onset = Some(c);
         self.unarmed_rise = Some(value);
-
         let at_onset = row(c);
         self.peak
             .copy_from_slice(&self.history[at_onset..at_onset + bands]);

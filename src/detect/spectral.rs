@@ -335,6 +335,7 @@ impl SpectralMatcher {
     pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings) -> Self {
         let rate = f64::from(settings.sample_rate);
         let mut analyzer = Analyzer::new(rate);
+        let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
         // the onset (the onset frame is centred on it), shift tolerance included.
         let decision_frames = (((settings.decision_seconds - WINDOW_SECONDS / 2.0) / HOP_SECONDS)
@@ -433,7 +434,7 @@ impl SpectralMatcher {
             frame_capacity,
             frame_count: 0,
             onsets: OnsetDetector::new(
-                OnsetParams::default(),
+                onset_params,
                 &analyzer.band_bins(),
                 win,
                 analyzer.hop,
@@ -462,7 +463,7 @@ impl SpectralMatcher {
             placed: [0; PLACED_KEPT],
             placed_count: 0,
             last_fired: None,
-            min_gap_samples: (OnsetParams::default().min_gap_seconds * rate) as u64,
+            min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
             tracked: vec![0.0; n_patterns * FEATURES],
             tracked_set: vec![false; n_patterns],
