@@ -253,7 +253,7 @@ fn print_look_alikes(set: &str, patterns: &[Pattern], settings: &DetectorSetting
     let pairs: Vec<String> = detector
         .look_alike_patterns(f32::NEG_INFINITY)
         .iter()
-        .map(|(a, b, s)| format!("{a}/{b} {s:.2}"))
+        .map(|p| format!("{}/{} {:.2}", p.first, p.second, p.similarity))
         .collect();
     eprintln!("{set}: take similarity {}", pairs.join(", "));
 }
@@ -295,7 +295,8 @@ fn print_label_similarity(
             .unwrap()
     };
     let mut sums: std::collections::BTreeMap<(String, String), (f64, usize)> = Default::default();
-    for (a, b, s) in detector.look_alike_patterns(f32::NEG_INFINITY) {
+    for pair in detector.look_alike_patterns(f32::NEG_INFINITY) {
+        let (a, b, s) = (pair.first, pair.second, pair.similarity);
         let (la, lb) = (label(&a), label(&b));
         for key in [(la.clone(), lb.clone()), (lb, la)] {
             let entry = sums.entry(key).or_default();

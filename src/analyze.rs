@@ -163,20 +163,21 @@ pub fn write_json(
 }
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most
-/// with their scores, its strength, the nearest background sound's score, and what
-/// became of it (`--explain`, on stderr).
+/// with their scores, its strength, the nearest background sound's score, how much of
+/// its sound the choice of its pattern heard, and what became of it (`--explain`, on
+/// stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  outcome",
-        "onset s", "best", "score", "second", "score", "strength", "speech", "rise dB"
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  outcome",
+        "onset s", "best", "score", "second", "score", "strength", "speech", "rise dB", "heard ms"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  {}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -185,6 +186,8 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             num(r.strength),
             num(r.background_score),
             r.rise_db.map_or("-".to_string(), |v| format!("{v:.1}")),
+            r.window_seconds
+                .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
             r.outcome.as_str()
         )?;
     }

@@ -150,6 +150,7 @@ struct RawDetector {
     // Keys of one method, once in [detector]: refused with where they now live.
     suppression_seconds: Option<toml::Value>,
     decision_seconds: Option<toml::Value>,
+    max_decision_seconds: Option<toml::Value>,
     speech_guard_seconds: Option<toml::Value>,
     min_strength: Option<toml::Value>,
 }
@@ -159,6 +160,7 @@ struct RawDetector {
 #[serde(deny_unknown_fields)]
 struct RawSpectral {
     decision_seconds: Option<f64>,
+    max_decision_seconds: Option<f64>,
     speech_guard_seconds: Option<f64>,
     min_strength: Option<f64>,
 }
@@ -219,6 +221,10 @@ pub struct DetectorSettings {
     /// Spectral method: how long after an onset the sound is classified. The built-in
     /// background of speech is pooled over the default; at another value it is not used.
     pub decision_seconds: f64,
+    /// Spectral method: the longest a decision waits, seconds from the onset, to tell
+    /// apart two patterns that sound alike over `decision_seconds` (a spoken "pop" and
+    /// "pew" share their "p") and part later. `decision_seconds` never waits.
+    pub max_decision_seconds: f64,
     /// Spectral method: an onset is ignored when, this long before it, a sound that no
     /// pattern recognised (speech, music) held 200 ms within 10 dB of the new sound's
     /// peak. 0 turns the guard off.
@@ -243,6 +249,7 @@ impl Default for DetectorSettings {
             max_pattern_seconds: 5.0,
             channel: None,
             decision_seconds: 0.025,
+            max_decision_seconds: 0.055,
             speech_guard_seconds: 0.65,
             min_strength: 0.06,
         }
@@ -537,6 +544,7 @@ impl RawConfig {
         for (key, value, table) in [
             ("suppression_seconds", &d.suppression_seconds, "waveform"),
             ("decision_seconds", &d.decision_seconds, "spectral"),
+            ("max_decision_seconds", &d.max_decision_seconds, "spectral"),
             ("speech_guard_seconds", &d.speech_guard_seconds, "spectral"),
             ("min_strength", &d.min_strength, "spectral"),
         ] {
@@ -580,6 +588,9 @@ impl RawConfig {
             decision_seconds: spectral
                 .decision_seconds
                 .unwrap_or(defaults.decision_seconds),
+            max_decision_seconds: spectral
+                .max_decision_seconds
+                .unwrap_or(defaults.max_decision_seconds),
             speech_guard_seconds: spectral
                 .speech_guard_seconds
                 .unwrap_or(defaults.speech_guard_seconds),
@@ -933,6 +944,15 @@ impl DetectorSettings {
             return Err(invalid(
                 &item,
                 format!("decision_seconds must be between 0.015 and 0.2, found {d}"),
+            ));
+        }
+        let m = self.max_decision_seconds;
+        if !(m.is_finite() && (d..=0.2).contains(&m)) {
+            return Err(invalid(
+                &item,
+                format!(
+                    "max_decision_seconds must be between decision_seconds ({d}) and 0.2, found {m}"
+                ),
             ));
         }
         let g = self.speech_guard_seconds;

@@ -231,6 +231,9 @@ pub struct LookAlike {
     pub similarity: f32,
     /// The decision window, seconds.
     pub window_seconds: f64,
+    /// When they part later: how much of a sound a choice between them hears, seconds
+    /// from its onset (the decision waits for it).
+    pub decided_after_seconds: Option<f64>,
 }
 
 impl LookAlike {
@@ -245,13 +248,28 @@ impl std::fmt::Display for LookAlike {
         write!(
             f,
             "patterns '{}' and '{}' look alike over their first {:.0} ms (similarity {:.2} \
-             of 1): the spectral method may take one for the other; make the sounds more \
-             different, or enrol more takes of each",
+             of 1)",
             self.first,
             self.second,
             self.window_seconds * 1000.0,
             self.similarity
-        )
+        )?;
+        // A pair that parts later is decided later: the wait is the user's to know.
+        if let Some(after) = self.decided_after_seconds {
+            write!(
+                f,
+                " and part later: the spectral method waits {:.0} ms after such a sound's \
+                 onset to tell which it is (max_decision_seconds); sounds that differ from \
+                 their start are decided sooner",
+                after * 1000.0
+            )
+        } else {
+            write!(
+                f,
+                ": the spectral method may take one for the other; make the sounds more \
+                 different, or enrol more takes of each"
+            )
+        }
     }
 }
 
@@ -269,11 +287,12 @@ pub fn look_alike_patterns(
     Ok(detector
         .look_alike_patterns(LOOK_ALIKE_SIMILARITY)
         .into_iter()
-        .map(|(first, second, similarity)| LookAlike {
-            first,
-            second,
-            similarity,
+        .map(|pair| LookAlike {
+            first: pair.first,
+            second: pair.second,
+            similarity: pair.similarity,
             window_seconds: settings.decision_seconds,
+            decided_after_seconds: pair.decided_after_seconds,
         })
         .collect())
 }

@@ -22,6 +22,7 @@ fn the_example_config_loads_with_its_patterns() {
     assert_eq!(config.detector.method, Method::Spectral);
     assert_eq!(config.detector.sample_rate, 22_050);
     assert_eq!(config.detector.min_strength, 0.06);
+    assert_eq!(config.detector.max_decision_seconds, 0.055);
     let names: Vec<&str> = config.patterns.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names, ["tick", "pop", "boom", "hoo"]);
     assert_eq!(config.patterns[3].kind, PatternKind::Continuous);
@@ -86,6 +87,8 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         ("[detector]\nmethod = \"waveform\"\n[detector.waveform]\nsuppression_seconds = -1\n", &["suppression_seconds must be between 0 and 5, found -1"]),
         ("[detector.spectral]\nspeech_guard_seconds = 2\n", &["speech_guard_seconds must be between 0 (off) and 1, found 2"]),
         ("[detector.spectral]\nmin_strength = 1.5\n", &["min_strength must be between 0 (any level) and 1, found 1.5"]),
+        ("[detector.spectral]\nmax_decision_seconds = 0.02\n", &["max_decision_seconds must be between decision_seconds (0.025) and 0.2, found 0.02"]),
+        ("[detector]\nmax_decision_seconds = 0.05\n", &["max_decision_seconds is a setting of the spectral method: put it in [detector.spectral]"]),
         // A method's settings live in its own table, and only the configured method's
         // table may be there.
         ("[detector]\nmin_strength = 0.1\n", &["[detector]", "min_strength is a setting of the spectral method: put it in [detector.spectral]"]),

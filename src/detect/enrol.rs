@@ -5,8 +5,8 @@
 //! when a detector is built (on the thread that builds it), never per block.
 
 use super::features::{
-    features_of_power, pool_power, scale_to_unit, Analyzer, BANDS, FEATURES, HOP_SECONDS,
-    WINDOW_SECONDS,
+    features_of_power, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
+    HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::onset::OnsetParams;
 use super::spectral::{first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_RANGE_DB};
@@ -81,6 +81,81 @@ pub(super) fn shrink_takes_towards_their_mean(templates: &mut [Template], kinds:
             t.drawn_towards = Some(drawn.clone());
         }
     }
+}
+
+/// The pooled power spectrum of `template` over its first `windows` decision windows
+/// of `decision_frames` frames from its onset (1: its `pooled_power`), into `out`:
+/// the mean of each window's pooled power, where the take has ended, silence (the room
+/// it is heard in adds its noise there).
+pub(super) fn window_power(
+    template: &Template,
+    windows: usize,
+    decision_frames: usize,
+    out: &mut [f32],
+) {
+    out.copy_from_slice(&template.pooled_power);
+    for w in 1..windows {
+        let k = w * decision_frames;
+        if let Some(later) = template.later_power.get((k - 1) * BANDS..k * BANDS) {
+            for (o, x) in out.iter_mut().zip(later) {
+                *o += x;
+            }
+        }
+    }
+    let windows = windows.max(1) as f32;
+    out.iter_mut().for_each(|o| *o /= windows);
+}
+
+/// For every ordered pair of impulse patterns (`patterns` × `patterns`, row-major):
+/// over how many decision windows a choice between the two is made. Two patterns
+/// whose takes look alike over one window (similarity `alike` or more, the best pair
+/// of takes) are told apart over the fewest windows, up to `max_windows`, after which
+/// no pair of their takes is that alike any more: a spoken "pop" and "pew" share their
+/// first 25 ms (the "p" and its release) and part with their vowels. A pair that stays
+/// alike however long it is heard (two knocks on one table) gains nothing by waiting,
+/// and gets 1, as does every pair that is not alike to begin with.
+pub(super) fn separating_windows(
+    templates: &[Template],
+    kinds: &[PatternKind],
+    decision_frames: usize,
+    basis: &[f32],
+    alike: f32,
+    max_windows: usize,
+) -> Vec<u8> {
+    let n = kinds.len();
+    let mut most_alike = vec![f32::NEG_INFINITY; n * n * max_windows];
+    let (mut power, mut a, mut b) = ([0.0f32; BANDS], [0.0f32; FEATURES], [0.0f32; FEATURES]);
+    for (i, ta) in templates.iter().enumerate() {
+        for tb in &templates[i + 1..] {
+            let (p, q) = (ta.pattern, tb.pattern);
+            if p == q || kinds[p] != PatternKind::Impulse || kinds[q] != PatternKind::Impulse {
+                continue;
+            }
+            for w in 1..=max_windows {
+                window_power(ta, w, decision_frames, &mut power);
+                features_of_power(&power, basis, &mut a);
+                window_power(tb, w, decision_frames, &mut power);
+                features_of_power(&power, basis, &mut b);
+                let s = similarity(&a, &b);
+                for (x, y) in [(p, q), (q, p)] {
+                    let m = &mut most_alike[(x * n + y) * max_windows + w - 1];
+                    *m = m.max(s);
+                }
+            }
+        }
+    }
+    (0..n * n)
+        .map(|pair| {
+            let by_window = &most_alike[pair * max_windows..(pair + 1) * max_windows];
+            if by_window[0] < alike {
+                return 1;
+            }
+            by_window
+                .iter()
+                .position(|&s| s < alike)
+                .map_or(1, |w| (w + 1) as u8)
+        })
+        .collect()
 }
 
 /// What [`take_features`] finds in one take.
@@ -294,6 +369,7 @@ pub(super) fn first_block_within(take: &[f32], hop: usize, range_db: f32) -> usi
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::detect::white_noise;
 
     fn settings() -> DetectorSettings {
         DetectorSettings {
@@ -342,6 +418,65 @@ mod tests {
         // A quiet room finds the "p".
         let early = second.expect("a second placement");
         assert!(early <= 2 * hop, "{early}");
+    }
+
+    /// A template of pattern `pattern` from `take`, placed at its start.
+    fn template(analyzer: &mut Analyzer, take: &[f32], pattern: usize) -> Template {
+        let t = take_features(analyzer, take, 5, 0);
+        Template {
+            pattern,
+            second_placement: false,
+            features: t.features,
+            pooled_power: t.pooled_power,
+            drawn_towards: None,
+            early_energy: t.early_energy,
+            length_after_onset: take.len() as u64,
+            later_power: t.later_power,
+            later_energy: t.later_energy,
+        }
+    }
+
+    #[test]
+    fn a_pair_alike_at_first_waits_for_the_windows_that_part_it_and_no_other_does() {
+        let rate = f64::from(settings().sample_rate);
+        let mut analyzer = Analyzer::new(rate);
+        // Three sounds open with the same 40 ms burst: two go on with different
+        // vowels ("pop", "pew"), the third with nothing (a click).
+        let burst = white_noise((0.04 * rate) as usize, 0.3, 5);
+        let then = |vowel: Vec<f32>| -> Vec<f32> { burst.iter().copied().chain(vowel).collect() };
+        let pop = then(tone(rate, 150.0, 250.0, 0.5));
+        let pew = then(tone(rate, 150.0, 2500.0, 0.5));
+        let click = burst.clone();
+        // A knock and the same knock a little quieter: alike however long.
+        let knock = tone(rate, 150.0, 900.0, 0.5);
+        let softer: Vec<f32> = knock.iter().map(|x| 0.8 * x).collect();
+        let takes = [pop, pew, click, knock, softer];
+        let templates: Vec<Template> = takes
+            .iter()
+            .enumerate()
+            .map(|(p, take)| template(&mut analyzer, take, p))
+            .collect();
+        let kinds = vec![PatternKind::Impulse; takes.len()];
+        let wait = separating_windows(&templates, &kinds, 5, &analyzer.cepstrum, 0.7, 3);
+        let n = takes.len();
+        let pair = |p: usize, q: usize| wait[p * n + q];
+        // One window (26 ms of sound) holds the burst only; the later ones, the vowels.
+        assert!((2..=3).contains(&pair(0, 1)), "{wait:?}");
+        assert_eq!(pair(1, 0), pair(0, 1));
+        // Waiting no longer than one window, nothing waits.
+        let one = separating_windows(&templates, &kinds, 5, &analyzer.cepstrum, 0.7, 1);
+        assert!(one.iter().all(|&w| w == 1), "{one:?}");
+        // The burst alone parts from a vowel's sound later as well.
+        assert!(pair(0, 2) > 1, "{wait:?}");
+        // Never parted: no wait; never alike: no wait; a pattern with itself: none.
+        assert_eq!(pair(3, 4), 1);
+        assert_eq!(pair(0, 3), 1);
+        assert!((0..n).all(|p| pair(p, p) == 1));
+        // Held patterns are never waited for.
+        let mut held = kinds.clone();
+        held[1] = PatternKind::Continuous;
+        let wait = separating_windows(&templates, &held, 5, &analyzer.cepstrum, 0.7, 3);
+        assert_eq!(wait[1], 1);
     }
 
     #[test]

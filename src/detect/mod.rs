@@ -28,7 +28,7 @@ use crate::audio::{AudioError, StreamResampler};
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 pub use gates::Outcome;
-pub use spectral::{OnsetRecord, SpectralMatcher};
+pub use spectral::{AlikePair, OnsetRecord, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
 /// The seed of the stages' own noise ([`white_noise`]).
@@ -232,9 +232,10 @@ impl Detector {
     }
 
     /// Spectral method: pairs of patterns whose takes look alike over the decision
-    /// window (similarity at least `min_similarity`, 1 for the same), most alike first.
-    /// Empty for the waveform method.
-    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<(Arc<str>, Arc<str>, f32)> {
+    /// window (similarity at least `min_similarity`, 1 for the same), most alike first,
+    /// and for a pair that parts later, how much of a sound a choice between them hears
+    /// (seconds from the onset). Empty for the waveform method.
+    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<AlikePair> {
         match &self.matcher {
             Matcher::Waveform(_) => Vec::new(),
             Matcher::Spectral(m) => m.look_alike_patterns(min_similarity),

@@ -27,7 +27,11 @@
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
 //! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern
 //! wins if its score passes its threshold; below, the sound is none of the patterns and
-//! nothing fires. Each onset is decided once, so a sound never gives two events. A
+//! nothing fires. Two patterns that one window cannot tell apart and that part later
+//! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
+//! windows, up to `max_decision_seconds` (`separating_windows` in [`super::enrol`],
+//! `SpectralMatcher::scores_over`); every gate still judges the first window.
+//! Each onset is decided once, so a sound never gives two events. A
 //! sound whose strength (its amplitude against the take's over the decision window) is
 //! below `min_strength` is not the user's (a voice across the room, a breath) and does not
 //! fire either. Nor does an onset inside the last impulse's take that the take itself
@@ -55,8 +59,8 @@ use serde::Serialize;
 use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room};
 use super::enrol::{
-    first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets, TakeFeatures,
-    Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+    first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
+    take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
     features_of_power, normalise, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
@@ -107,6 +111,9 @@ struct PatternInfo {
 struct PendingOnset {
     /// Frame at which the onset was detected.
     detected: u64,
+    /// Decision windows its decision waits for: more than one once its two best
+    /// patterns are a pair that one window cannot tell apart (`separating`).
+    windows: usize,
     /// Once placed: the onset sample and the frame centred on it.
     placed: Option<(u64, u64)>,
 }
@@ -230,9 +237,29 @@ pub struct SpectralMatcher {
     background: BackgroundModel,
     /// The onset being classified: its best similarity with the background.
     background_score: f32,
+    /// Per ordered pair of patterns (row-major): over how many decision windows the
+    /// choice between them is made ([`separating_windows`]).
+    separating: Vec<u8>,
+    /// The most windows any pair waits for (1: none waits).
+    max_windows: usize,
+    /// A take's pooled power over several windows (scratch).
+    take_power: Vec<f32>,
     /// The features of every onset that stands out of its quiet, when building a
     /// background model ([`background_model`]).
     collected: Option<Vec<f32>>,
+}
+
+/// Two patterns whose takes look alike over the decision window
+/// ([`SpectralMatcher::look_alike_patterns`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AlikePair {
+    pub first: Arc<str>,
+    pub second: Arc<str>,
+    /// The best similarity of their takes, 1 for the same.
+    pub similarity: f32,
+    /// When they part later: how much of a sound a choice between them waits for,
+    /// seconds from its onset.
+    pub decided_after_seconds: Option<f64>,
 }
 
 /// What became of one onset (`analyze --explain`).
@@ -262,6 +289,11 @@ pub struct OnsetRecord {
     /// quiet-before gate asks for 10).
     #[serde(serialize_with = "super::opt_db")]
     pub rise_db: Option<f64>,
+    /// The sound the choice of its pattern was made on, seconds from the onset: one
+    /// decision window, or more when its two best patterns are alike over one
+    /// ([`separating_windows`]).
+    #[serde(serialize_with = "super::opt_seconds")]
+    pub window_seconds: Option<f64>,
     pub outcome: Outcome,
 }
 
@@ -306,6 +338,13 @@ const CONTINUATION_DB: f64 = 6.0;
 
 const RECOGNISED_SPANS: usize = 8;
 
+/// Two patterns whose takes are this alike over a decision window cannot be told
+/// apart there; a choice between them waits for the windows that part them
+/// ([`separating_windows`]). Swept over every dev set (`docs/classify.md`): 0.6 and 0.7
+/// score alike, 0.8 and 0.9 lose the beats' "B" and "Pf", 0.5 and less wait for pairs
+/// that longer windows do not part.
+const ALIKE_SIMILARITY: f32 = 0.7;
+
 /// A recognised impulse covers its take's length from its onset, and longer while its
 /// sound stays within `SOUND_DROP_DB` of its peak (said more slowly than enrolled), up to
 /// this many times the take's length.
@@ -342,6 +381,12 @@ impl SpectralMatcher {
             .floor() as usize)
             .saturating_sub(MAX_SHIFT)
             .max(2);
+        // As many whole windows as reach no further than `max_decision_seconds`.
+        let max_windows = ((((settings.max_decision_seconds - WINDOW_SECONDS / 2.0) / HOP_SECONDS)
+            .floor() as usize)
+            .saturating_sub(MAX_SHIFT)
+            / decision_frames)
+            .max(1);
         let mut templates = Vec::new();
         let mut infos = Vec::new();
         for (pi, p) in patterns.iter().enumerate() {
@@ -414,6 +459,16 @@ impl SpectralMatcher {
         let win = analyzer.win;
         let n_patterns = infos.len();
         let kinds: Vec<PatternKind> = infos.iter().map(|i| i.kind).collect();
+        let separating = separating_windows(
+            &templates,
+            &kinds,
+            decision_frames,
+            &analyzer.cepstrum,
+            ALIKE_SIMILARITY,
+            max_windows,
+        );
+        // The most any pair waits for.
+        let max_windows = separating.iter().copied().max().unwrap_or(1).max(1) as usize;
         shrink_takes_towards_their_mean(&mut templates, &kinds);
         // Nothing is compared without templates (enrolment's probe of a take).
         let noise_over_floor = if templates.is_empty() {
@@ -472,6 +527,9 @@ impl SpectralMatcher {
             explain: None,
             background: BackgroundModel::builtin().for_matcher(FEATURES, decision_frames),
             background_score: f32::NEG_INFINITY,
+            separating,
+            max_windows,
+            take_power: vec![0.0; BANDS],
             collected: None,
         }
     }
@@ -496,7 +554,11 @@ impl SpectralMatcher {
     /// least as much as `min_similarity` (the score an instance of one would give the
     /// other's take): pattern names and the best similarity of their takes, most alike
     /// first. Such patterns are easily taken for each other.
-    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<(Arc<str>, Arc<str>, f32)> {
+    ///
+    ///
+    /// With each pair that parts later ([`separating_windows`]), how much of a sound
+    /// (seconds from its onset) a choice between the two hears.
+    pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<AlikePair> {
         let mut pairs: Vec<(usize, usize, f32)> = Vec::new();
         for (i, a) in self.templates.iter().enumerate() {
             for b in &self.templates[i + 1..] {
@@ -516,21 +578,32 @@ impl SpectralMatcher {
         pairs
             .into_iter()
             .map(|(a, b, s)| {
-                (
-                    self.patterns[a].name.clone(),
-                    self.patterns[b].name.clone(),
-                    s,
-                )
+                let windows = self.separating[a * self.patterns.len() + b] as usize;
+                AlikePair {
+                    first: self.patterns[a].name.clone(),
+                    second: self.patterns[b].name.clone(),
+                    similarity: s,
+                    decided_after_seconds: (windows > 1).then(|| self.heard_seconds(windows)),
+                }
             })
             .collect()
     }
 
     /// Longest time from an impulse's onset to its decision, seconds: the decision
-    /// frames and their shift, the frames the onset may be placed before its detection
-    /// (the rise is looked for over 6 frames), and one window.
+    /// frames (as many windows as the most alike pair of patterns waits for) and their
+    /// shift, the frames the onset may be placed before its detection (the rise is
+    /// looked for over 6 frames), and one window.
     pub fn decision_delay_bound(&self) -> f64 {
-        let frames = self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
+        let frames =
+            self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
         (frames * self.hop() + self.analyzer.win) as f64 / self.rate
+    }
+
+    /// The sound a decision over `windows` decision windows waits for, seconds from
+    /// the onset: to the end of the last frame that it pools, shift included (the
+    /// onset's frame is centred on it).
+    fn heard_seconds(&self, windows: usize) -> f64 {
+        (windows * self.decision_frames + MAX_SHIFT) as f64 * HOP_SECONDS + WINDOW_SECONDS / 2.0
     }
 
     /// Samples per frame hop.
@@ -571,9 +644,11 @@ impl SpectralMatcher {
             return;
         }
         // Enough silence for pending decisions and a held sound's end.
-        let pad = (self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 4) * self.hop()
-            + self.analyzer.win
-            + (self.held.params().gap_seconds * self.rate) as usize;
+        let pad =
+            (self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 4)
+                * self.hop()
+                + self.analyzer.win
+                + (self.held.params().gap_seconds * self.rate) as usize;
         let end = self.consumed;
         const ZEROS: [f32; 256] = [0.0; 256];
         let mut left = pad;
@@ -619,6 +694,7 @@ impl SpectralMatcher {
             if self.pending.len() < self.pending.capacity() {
                 self.pending.push(PendingOnset {
                     detected: onset.frame,
+                    windows: 1,
                     placed: None,
                 });
             }
@@ -676,11 +752,16 @@ impl SpectralMatcher {
                 }
                 None => break,
             };
-            if self.frame_count <= frame + (self.decision_frames + MAX_SHIFT) as u64 {
+            let windows = self.pending[0].windows;
+            if self.frame_count <= frame + (windows * self.decision_frames + MAX_SHIFT) as u64 {
                 break;
             }
-            self.pending.remove(0);
-            self.classify(time_sample, frame, out);
+            match self.classify(time_sample, frame, windows, out) {
+                Some(more) => self.pending[0].windows = more,
+                None => {
+                    self.pending.remove(0);
+                }
+            }
         }
     }
 
@@ -701,12 +782,21 @@ impl SpectralMatcher {
                 strength: None,
                 background_score: None,
                 rise_db: None,
+                window_seconds: None,
                 outcome,
             });
         }
     }
 
-    fn classify(&mut self, time_sample: u64, onset_frame: u64, out: &mut Vec<Event>) {
+    /// Decides the onset at `time_sample` (frame `onset_frame`) with `windows` decision
+    /// windows of its sound at hand; returns how many it needs when that is more.
+    fn classify(
+        &mut self,
+        time_sample: u64,
+        onset_frame: u64,
+        windows: usize,
+        out: &mut Vec<Event>,
+    ) -> Option<usize> {
         if self.collected.is_some() {
             let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
             if peak - pre >= self.gates.pre_quiet_db {
@@ -717,7 +807,7 @@ impl SpectralMatcher {
             }
         }
         if self.templates.is_empty() {
-            return;
+            return None;
         }
         self.score_patterns(onset_frame);
         let mut pi = 0;
@@ -726,35 +816,44 @@ impl SpectralMatcher {
                 pi = p;
             }
         }
-        let PatternScore {
-            score: best_score,
-            take: best_template,
-            ..
-        } = self.pattern_scores[pi];
         let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
         // Once per onset, so that the explanation has it too: a sum over the 25 ms
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
-        let strength = (early / self.templates[best_template].early_energy.max(1e-12)).sqrt();
-        let evidence = Evidence {
-            rise_db: peak - pre,
-            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
-            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+        let mut evidence = self.evidence(pi, time_sample, onset_frame, peak, pre, early);
+        let mut outcome = decide(&evidence, &self.gates);
+        // An onset that fires, whose runner-up is a pattern one window cannot tell from
+        // its best, is decided between the two over as many windows as part them.
+        let mut parted_over = 1;
+        if let Some(q) = self.runner_up(pi) {
+            let n = self.patterns.len();
+            let needed = self.separating[pi * n + q] as usize;
+            if outcome == Outcome::Fired
+                && needed > 1
+                && self.pattern_scores[q].score >= self.patterns[q].threshold
+            {
+                if windows < needed {
+                    return Some(needed);
+                }
+                parted_over = needed;
+                let [over_p, over_q] = self.scores_over(needed, onset_frame, [pi, q]);
+                if over_q > over_p {
+                    pi = q;
+                    evidence = self.evidence(pi, time_sample, onset_frame, peak, pre, early);
+                    outcome = decide(&evidence, &self.gates);
+                }
+            }
+        }
+        let Evidence {
             best_score,
-            threshold: self.patterns[pi].threshold,
-            background_score: self.background_score,
-            held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
             strength,
-        };
-        let outcome = decide(&evidence, &self.gates);
+            ..
+        } = evidence;
+        let best_template = self.pattern_scores[pi].take;
         if self.explain.is_some() {
             let second = self
-                .pattern_scores
-                .iter()
-                .enumerate()
-                .filter(|&(p, s)| p != pi && s.take != usize::MAX)
-                .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
-                .map(|(p, s)| (p, s.score));
+                .runner_up(pi)
+                .map(|p| (p, self.pattern_scores[p].score));
             let name = |i: usize| self.patterns[i].name.clone();
             let record = OnsetRecord {
                 time: time_sample as f64 / self.rate,
@@ -770,6 +869,7 @@ impl SpectralMatcher {
                     .rise_db
                     .is_finite()
                     .then_some(f64::from(evidence.rise_db)),
+                window_seconds: Some(self.heard_seconds(parted_over)),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
@@ -790,7 +890,7 @@ impl SpectralMatcher {
             );
         }
         if outcome != Outcome::Fired {
-            return;
+            return None;
         }
         self.last_fired = Some(time_sample);
         let take_length = self.templates[best_template].length_after_onset;
@@ -840,6 +940,68 @@ impl SpectralMatcher {
             self.track(pi);
         }
         out.push(decided);
+        None
+    }
+
+    /// What the stages found out about the onset at `time_sample` (frame
+    /// `onset_frame`) as an instance of pattern `pi`: `peak` and `pre` from
+    /// [`Self::peak_and_before`], `early` the energy of its decision window.
+    fn evidence(
+        &mut self,
+        pi: usize,
+        time_sample: u64,
+        onset_frame: u64,
+        peak: f32,
+        pre: f32,
+        early: f64,
+    ) -> Evidence {
+        let PatternScore { score, take, .. } = self.pattern_scores[pi];
+        Evidence {
+            rise_db: peak - pre,
+            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
+            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+            best_score: score,
+            threshold: self.patterns[pi].threshold,
+            background_score: self.background_score,
+            held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
+            strength: (early / self.templates[take].early_energy.max(1e-12)).sqrt(),
+        }
+    }
+
+    /// The pattern that scored best after `pi` on the onset being classified.
+    fn runner_up(&self, pi: usize) -> Option<usize> {
+        self.pattern_scores
+            .iter()
+            .enumerate()
+            .filter(|&(p, s)| p != pi && s.take != usize::MAX)
+            .max_by(|a, b| a.1.score.total_cmp(&b.1.score))
+            .map(|(p, _)| p)
+    }
+
+    /// The best score of each of `pair`'s takes over `windows` decision windows from
+    /// the onset at frame `onset_frame`, each take heard in the onset's room and
+    /// allowing the same shift as one window's scoring.
+    fn scores_over(&mut self, windows: usize, onset_frame: u64, pair: [usize; 2]) -> [f32; 2] {
+        let mut best = [f32::NEG_INFINITY; 2];
+        for shift in 0..=2 * MAX_SHIFT {
+            let first = (onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64);
+            self.pool_frames(first, windows * self.decision_frames);
+            self.room.hear(&self.instance_power);
+            for t in &self.templates {
+                let Some(i) = pair.iter().position(|&p| p == t.pattern) else {
+                    continue;
+                };
+                window_power(t, windows, self.decision_frames, &mut self.take_power);
+                self.room.take(
+                    &self.take_power,
+                    None,
+                    &self.analyzer.cepstrum,
+                    &mut self.heard_take,
+                );
+                best[i] = best[i].max(similarity(&self.heard_take, &self.instance));
+            }
+        }
+        best
     }
 
     /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
@@ -970,10 +1132,16 @@ impl SpectralMatcher {
     /// Pools the decision frames from frame `first` (still in the ring) into
     /// `self.instance`.
     fn pool_instance(&mut self, first: u64) {
+        self.pool_frames(first, self.decision_frames);
+    }
+
+    /// Pools `count` frames from frame `first` (still in the ring) into
+    /// `self.instance_power` and `self.instance`.
+    fn pool_frames(&mut self, first: u64, count: usize) {
         let cap = self.frame_capacity as u64;
         let frames = &self.frames;
         pool_power(
-            self.decision_frames,
+            count,
             |k| {
                 let slot = ((first + k as u64) % cap) as usize;
                 &frames[slot * BANDS..(slot + 1) * BANDS]
