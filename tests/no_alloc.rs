@@ -203,3 +203,78 @@ fn the_counter_sees_allocations() {
     });
     assert_eq!(n, 1);
 }
+
+/// Two patterns that open with the same 30 ms burst and part on what follows: a choice
+/// between them waits for more of the sound (`max_decision_seconds`). That path too
+/// allocates nothing, stays within the decision delay bound, and gives the same events
+/// whatever the block size.
+#[test]
+fn deciding_between_patterns_alike_at_first_allocates_nothing_and_ignores_block_size() {
+    let settings = DetectorSettings {
+        method: Method::Spectral,
+        ..DetectorSettings::default()
+    };
+    // The burst 20 dB under what follows, as a "p" under its vowel.
+    let opening: Vec<f32> = noise_burst(RATE, 0.03, 1.0, 31)
+        .iter()
+        .map(|x| 0.1 * x)
+        .collect();
+    let then = |rest: Vec<f32>| -> Vec<f32> { opening.iter().copied().chain(rest).collect() };
+    let low = then(sweep(RATE, 0.15, 300.0, 250.0, 0.08));
+    let high = then(sweep(RATE, 0.15, 2500.0, 2000.0, 0.08));
+    let patterns = vec![
+        impulse("low", low.clone(), &settings),
+        impulse("high", high.clone(), &settings),
+    ];
+    let mut rec = vec![0.0f32; samples_for(6.0, RATE)];
+    let mut truth = Vec::new();
+    for i in 0..10 {
+        let (name, sound) = if i % 3 == 0 {
+            ("high", &high)
+        } else {
+            ("low", &low)
+        };
+        let at = samples_for(0.4 + 0.5 * i as f64, RATE);
+        place(&mut rec, sound, at, 0.7);
+        truth.push((name, at as f64 / f64::from(RATE)));
+    }
+    add_noise(&mut rec, 0.001, 5);
+    let run = |block: usize, watch: bool| -> (Vec<Event>, usize, f64) {
+        let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
+        let mut events: Vec<Event> = Vec::with_capacity(64);
+        let warm = samples_for(0.3, RATE);
+        for chunk in rec[..warm].chunks(block) {
+            det.process(chunk, &mut events);
+        }
+        let mut go = || {
+            for chunk in rec[warm..].chunks(block) {
+                det.process(chunk, &mut events);
+            }
+        };
+        let n = if watch {
+            allocations_in(go)
+        } else {
+            go();
+            0
+        };
+        det.finish(&mut events);
+        (events, n, det.decision_delay_bound())
+    };
+    let (events, n, bound) = run(256, true);
+    assert_eq!(n, 0, "{n} allocations");
+    let found: Vec<(&str, f64)> = events.iter().map(|e| (&*e.pattern, e.time)).collect();
+    assert_eq!(found.len(), truth.len(), "{found:?}");
+    for ((name, at), e) in truth.iter().zip(&events) {
+        assert_eq!(&*e.pattern, *name, "{found:?}");
+        assert!((e.time - at).abs() < 0.01, "{found:?}");
+        // It waited for the part after the shared opening, and no longer than the bound.
+        assert!(
+            e.emitted_at - e.time > settings.decision_seconds + 0.005,
+            "{e:?}"
+        );
+        assert!(e.emitted_at - e.time <= bound, "{e:?}, bound {bound}");
+    }
+    for block in [1, 7, 4096] {
+        assert_eq!(run(block, false).0, events, "blocks of {block}");
+    }
+}
