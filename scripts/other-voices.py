@@ -1,0 +1,42 @@
+#!/usr/bin/env python3
+"""Sets of the development sets' voice protocol (D4_voice_*, N_speech_espeak_*) for
+espeak-ng voices that no development set uses: a check that a change carries over to
+voices it was not chosen on. Uses the generator of ../shared/devsets (its venv, with
+numpy and soundfile, as build.sh makes it), espeak-ng and sox.
+
+    ~/.cache/onomato-devsets-venv/bin/python scripts/other-voices.py /tmp/other-voices
+    bash ../shared/devsets/run.sh target/release/onomato /tmp/other-voices
+
+Keep it a check: a setting chosen on these voices is fitted to them as well.
+"""
+
+import pathlib
+import sys
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
+import build  # noqa: E402  (the development sets' generator)
+
+# (espeak-ng voice, set suffix, impulse words): voices the development sets do not use.
+VOICES = [
+    ("en+m3", "m3", ["tick", "pop", "pew", "boom"]),
+    ("en+f2", "f2", ["tick", "pop", "pew", "boom"]),
+    ("en-us+m4", "usm4", ["tick", "pop", "pew", "boom"]),
+    ("en+f4", "f4", ["tack", "zap", "pom", "knock"]),
+    ("en-gb-scotland+m5", "scm5", ["tick", "pop", "pew", "boom"]),
+    ("en+klatt", "klatt", ["tick", "pop", "pew", "boom"]),
+]
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    out = pathlib.Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    for voice, short, words in VOICES:
+        build.d4_voice(out, voice, short, words)
+        build.n_speech_espeak(out, voice, short)
+
+
+if __name__ == "__main__":
+    main()
