@@ -214,10 +214,10 @@ pub struct AnalyzeArgs {
     #[arg(long, value_name = "OUT.svg")]
     pub plot: Option<PathBuf>,
     /// Spectral method: list every onset the detector considered, with the two patterns
-    /// it resembled most, their scores, and what became of it and which stage decided
-    /// (fired, quiet_before, speech_guard, continuation, below_threshold,
-    /// held_continues, min_strength, same_onset): a table on stderr, and an "onsets"
-    /// array in the JSON output.
+    /// it resembled most, their scores, how much of its sound the choice heard, and what
+    /// became of it and which stage decided (fired, quiet_before, speech_guard,
+    /// continuation, below_threshold, background, held_continues, min_strength,
+    /// same_onset): a table on stderr, and an "onsets" array in the JSON output.
     #[arg(long)]
     pub explain: bool,
 }

@@ -713,6 +713,7 @@ fn explain_lists_every_onset_with_what_became_of_it() {
         "speech_guard",
         "continuation",
         "below_threshold",
+        "background",
         "held_continues",
         "min_strength",
         "same_onset",
@@ -728,6 +729,14 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             .as_f64()
             .unwrap_or_else(|| panic!("no rise_db: {o}"));
         assert_eq!(o["outcome"] == "quiet_before", rise < 10.0, "{o}");
+    }
+    // Every scored onset says how much of its sound the choice of its pattern heard:
+    // about the decision window (25 ms) here, where no two patterns begin alike.
+    for o in onsets.iter().filter(|o| o["outcome"] != "same_onset") {
+        let heard = o["window_seconds"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no window_seconds: {o}"));
+        assert!((0.015..=0.03).contains(&heard), "{o}");
     }
     // The same, as a table on stderr.
     let table = stderr(&out);
