@@ -123,20 +123,28 @@ pub(super) fn separating_windows(
     max_windows: usize,
 ) -> Vec<u8> {
     let n = kinds.len();
+    // Each take's features over 1..=max_windows windows, made once.
+    let mut power = [0.0f32; BANDS];
+    let mut features = vec![0.0f32; templates.len() * max_windows * FEATURES];
+    for (t, chunk) in templates
+        .iter()
+        .zip(features.chunks_exact_mut(max_windows * FEATURES))
+    {
+        for (w, out) in chunk.chunks_exact_mut(FEATURES).enumerate() {
+            window_power(t, w + 1, decision_frames, &mut power);
+            features_of_power(&power, basis, out);
+        }
+    }
+    let of = |t: usize, w: usize| &features[(t * max_windows + w - 1) * FEATURES..][..FEATURES];
     let mut most_alike = vec![f32::NEG_INFINITY; n * n * max_windows];
-    let (mut power, mut a, mut b) = ([0.0f32; BANDS], [0.0f32; FEATURES], [0.0f32; FEATURES]);
     for (i, ta) in templates.iter().enumerate() {
-        for tb in &templates[i + 1..] {
+        for (j, tb) in templates.iter().enumerate().skip(i + 1) {
             let (p, q) = (ta.pattern, tb.pattern);
             if p == q || kinds[p] != PatternKind::Impulse || kinds[q] != PatternKind::Impulse {
                 continue;
             }
             for w in 1..=max_windows {
-                window_power(ta, w, decision_frames, &mut power);
-                features_of_power(&power, basis, &mut a);
-                window_power(tb, w, decision_frames, &mut power);
-                features_of_power(&power, basis, &mut b);
-                let s = similarity(&a, &b);
+                let s = similarity(of(i, w), of(j, w));
                 for (x, y) in [(p, q), (q, p)] {
                     let m = &mut most_alike[(x * n + y) * max_windows + w - 1];
                     *m = m.max(s);

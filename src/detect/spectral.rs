@@ -382,7 +382,8 @@ impl SpectralMatcher {
             .saturating_sub(MAX_SHIFT)
             .max(2);
         // As many whole windows as reach no further than `max_decision_seconds`.
-        let max_windows = ((((settings.max_decision_seconds - WINDOW_SECONDS / 2.0) / HOP_SECONDS)
+        let allowed_windows = ((((settings.max_decision_seconds - WINDOW_SECONDS / 2.0)
+            / HOP_SECONDS)
             .floor() as usize)
             .saturating_sub(MAX_SHIFT)
             / decision_frames)
@@ -465,7 +466,7 @@ impl SpectralMatcher {
             decision_frames,
             &analyzer.cepstrum,
             ALIKE_SIMILARITY,
-            max_windows,
+            allowed_windows,
         );
         // The most any pair waits for.
         let max_windows = separating.iter().copied().max().unwrap_or(1).max(1) as usize;
@@ -554,7 +555,6 @@ impl SpectralMatcher {
     /// least as much as `min_similarity` (the score an instance of one would give the
     /// other's take): pattern names and the best similarity of their takes, most alike
     /// first. Such patterns are easily taken for each other.
-    ///
     ///
     /// With each pair that parts later ([`separating_windows`]), how much of a sound
     /// (seconds from its onset) a choice between the two hears.
@@ -820,7 +820,18 @@ impl SpectralMatcher {
         // Once per onset, so that the explanation has it too: a sum over the 25 ms
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
-        let mut evidence = self.evidence(pi, time_sample, onset_frame, peak, pre, early);
+        // What does not depend on the pattern, once.
+        let context = Evidence {
+            rise_db: peak - pre,
+            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
+            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+            background_score: self.background_score,
+            best_score: f32::NEG_INFINITY,
+            threshold: 0.0,
+            held_by_best_pattern: false,
+            strength: 0.0,
+        };
+        let mut evidence = self.as_instance_of(pi, &context, early);
         let mut outcome = decide(&evidence, &self.gates);
         // An onset that fires, whose runner-up is a pattern one window cannot tell from
         // its best, is decided between the two over as many windows as part them.
@@ -839,7 +850,7 @@ impl SpectralMatcher {
                 let [over_p, over_q] = self.scores_over(needed, onset_frame, [pi, q]);
                 if over_q > over_p {
                     pi = q;
-                    evidence = self.evidence(pi, time_sample, onset_frame, peak, pre, early);
+                    evidence = self.as_instance_of(pi, &context, early);
                     outcome = decide(&evidence, &self.gates);
                 }
             }
@@ -943,28 +954,17 @@ impl SpectralMatcher {
         None
     }
 
-    /// What the stages found out about the onset at `time_sample` (frame
-    /// `onset_frame`) as an instance of pattern `pi`: `peak` and `pre` from
-    /// [`Self::peak_and_before`], `early` the energy of its decision window.
-    fn evidence(
-        &mut self,
-        pi: usize,
-        time_sample: u64,
-        onset_frame: u64,
-        peak: f32,
-        pre: f32,
-        early: f64,
-    ) -> Evidence {
+    /// The evidence about the onset being classified as an instance of pattern `pi`:
+    /// `context` with the pattern's own score, threshold, held sound and strength
+    /// (`early`, the energy of the onset's decision window, against its best take's).
+    fn as_instance_of(&self, pi: usize, context: &Evidence, early: f64) -> Evidence {
         let PatternScore { score, take, .. } = self.pattern_scores[pi];
         Evidence {
-            rise_db: peak - pre,
-            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
-            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
             best_score: score,
             threshold: self.patterns[pi].threshold,
-            background_score: self.background_score,
             held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
             strength: (early / self.templates[take].early_energy.max(1e-12)).sqrt(),
+            ..*context
         }
     }
 
