@@ -163,9 +163,9 @@ pub fn write_json(
 }
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most
-/// with their scores, its strength, the nearest background sound's score, how much of
-/// its sound the choice of its pattern heard, and what became of it (`--explain`, on
-/// stderr).
+/// with their scores, its strength, the nearest background sound's score, its rise
+/// (marked `*` when it began over a sound that fired), how much of its sound the
+/// choice of its pattern heard, and what became of it (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
@@ -185,7 +185,10 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             num(r.second_score),
             num(r.strength),
             num(r.background_score),
-            r.rise_db.map_or("-".to_string(), |v| format!("{v:.1}")),
+            r.rise_db.map_or("-".to_string(), |v| {
+                let over_a_word = if r.over_fired_sound { "*" } else { "" };
+                format!("{v:.1}{over_a_word}")
+            }),
             r.window_seconds
                 .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
             r.outcome.as_str()

@@ -8,7 +8,9 @@
 //! onset as many samples later and the same strength, wherever the frames fall). The
 //! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
 //! here: it must stand 10 dB out of the 40-10 ms before it (a consonant inside speech
-//! follows a vowel), and so on. The levels they compare are the sound in a frame, its
+//! follows a vowel) unless that sound is a word that fired and it is clearly an
+//! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
+//! so on. The levels they compare are the sound in a frame, its
 //! power less twice the room's noise (`sound_level_db`), so that noise just under a
 //! sound neither hides it nor passes for speech around it.
 //! An enrolled take's onset is placed by the same stages, the take streamed after noise:
@@ -207,9 +209,9 @@ pub struct SpectralMatcher {
     heard_take: Vec<f32>,
     pitch: PitchEstimator,
     finished: bool,
-    /// Spans (first and last sample) of the last recognised sounds, a ring; a held
-    /// sound's span is open (`u64::MAX`) until it ends.
-    recognised: [(u64, u64); RECOGNISED_SPANS],
+    /// The last recognised sounds, a ring; a held sound's span is open (`u64::MAX`)
+    /// until it ends.
+    recognised: [RecognisedSpan; RECOGNISED_SPANS],
     recognised_next: usize,
     /// The newest recognised impulse, whose span grows while its sound goes on.
     extending: Option<ExtendingSpan>,
@@ -289,6 +291,10 @@ pub struct OnsetRecord {
     /// quiet-before gate asks for 10).
     #[serde(serialize_with = "super::opt_db")]
     pub rise_db: Option<f64>,
+    /// Some of those 10-40 ms lie in a sound that fired: the onset begins over a
+    /// recognised word's tail, and an impulse pattern scoring `over_fired_score` there
+    /// is not held to the rise.
+    pub over_fired_sound: bool,
     /// The sound the choice of its pattern was made on, seconds from the onset: one
     /// decision window, or more when its two best patterns are alike over one
     /// ([`separating_windows`]).
@@ -337,6 +343,28 @@ const CONTINUATION_SIMILARITY: f32 = 0.8;
 const CONTINUATION_DB: f64 = 6.0;
 
 const RECOGNISED_SPANS: usize = 8;
+
+/// A recognised sound's span, first and last sample.
+#[derive(Clone, Copy)]
+struct RecognisedSpan {
+    from: u64,
+    to: u64,
+    /// It fired (rather than being a pattern's sound that only the guard stopped).
+    fired: bool,
+}
+
+impl RecognisedSpan {
+    const NONE: Self = Self {
+        from: u64::MAX,
+        to: u64::MAX,
+        fired: false,
+    };
+
+    /// Whether the span holds sample `n`.
+    fn holds(&self, n: u64) -> bool {
+        self.from != u64::MAX && n >= self.from && n <= self.to
+    }
+}
 
 /// Two patterns whose takes are this alike over a decision window cannot be told
 /// apart there; a choice between them waits for the windows that part them
@@ -508,7 +536,7 @@ impl SpectralMatcher {
             pitch: PitchEstimator::new(rate),
             analyzer,
             finished: false,
-            recognised: [(u64::MAX, u64::MAX); RECOGNISED_SPANS],
+            recognised: [RecognisedSpan::NONE; RECOGNISED_SPANS],
             recognised_next: 0,
             extending: None,
             speech_guard_seconds: settings.speech_guard_seconds,
@@ -782,6 +810,7 @@ impl SpectralMatcher {
                 strength: None,
                 background_score: None,
                 rise_db: None,
+                over_fired_sound: false,
                 window_seconds: None,
                 outcome,
             });
@@ -823,10 +852,12 @@ impl SpectralMatcher {
         // What does not depend on the pattern, once.
         let context = Evidence {
             rise_db: peak - pre,
+            over_fired_sound: self.over_fired_sound(time_sample),
             follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
             continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
+            best_is_impulse: false,
             threshold: 0.0,
             held_by_best_pattern: false,
             strength: 0.0,
@@ -880,6 +911,7 @@ impl SpectralMatcher {
                     .rise_db
                     .is_finite()
                     .then_some(f64::from(evidence.rise_db)),
+                over_fired_sound: evidence.over_fired_sound,
                 window_seconds: Some(self.heard_seconds(parted_over)),
                 outcome,
             };
@@ -898,6 +930,7 @@ impl SpectralMatcher {
             self.cover(
                 time_sample,
                 time_sample + self.templates[best_template].length_after_onset,
+                false,
             );
         }
         if outcome != Outcome::Fired {
@@ -924,7 +957,7 @@ impl SpectralMatcher {
         } else {
             time_sample + take_length
         };
-        let slot = self.cover(time_sample, span_end);
+        let slot = self.cover(time_sample, span_end, true);
         let info = &self.patterns[pi];
         self.extending = (info.kind == PatternKind::Impulse).then_some(ExtendingSpan {
             slot,
@@ -961,6 +994,7 @@ impl SpectralMatcher {
         let PatternScore { score, take, .. } = self.pattern_scores[pi];
         Evidence {
             best_score: score,
+            best_is_impulse: self.patterns[pi].kind == PatternKind::Impulse,
             threshold: self.patterns[pi].threshold,
             held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
             strength: (early / self.templates[take].early_energy.max(1e-12)).sqrt(),
@@ -1005,13 +1039,15 @@ impl SpectralMatcher {
     }
 
     /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
-    /// guard (from 10 ms before the onset, as the guard looks); returns its slot.
-    fn cover(&mut self, time_sample: u64, end: u64) -> usize {
+    /// guard (from 10 ms before the onset, as the guard looks), and whether it fired;
+    /// returns its slot.
+    fn cover(&mut self, time_sample: u64, end: u64, fired: bool) -> usize {
         let slot = self.recognised_next;
-        self.recognised[slot] = (
-            time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
-            end,
-        );
+        self.recognised[slot] = RecognisedSpan {
+            from: time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
+            to: end,
+            fired,
+        };
         self.recognised_next = (slot + 1) % RECOGNISED_SPANS;
         slot
     }
@@ -1033,6 +1069,21 @@ impl SpectralMatcher {
             .map(|f| self.levels[(f % cap) as usize])
             .fold(f32::NEG_INFINITY, f32::max);
         (peak, pre)
+    }
+
+    /// Whether a frame of the quiet-before span of the onset at `time_sample` lies in
+    /// a sound that fired: the onset then begins over that word's tail, not inside
+    /// sound that no pattern recognised (judged by the sample at a frame's centre).
+    fn over_fired_sound(&self, time_sample: u64) -> bool {
+        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
+        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
+        let (hop, win) = (self.hop() as u64, self.analyzer.win as u64);
+        self.frames_inside(quiet_from, quiet_to).any(|f| {
+            let centre = f * hop + win / 2;
+            self.recognised
+                .iter()
+                .any(|span| span.fired && span.holds(centre))
+        })
     }
 
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
@@ -1217,7 +1268,7 @@ impl SpectralMatcher {
         e.peak_db = e.peak_db.max(level);
         let end = centre + self.hop() as u64 / 2;
         let span = &mut self.recognised[e.slot];
-        span.1 = span.1.max(end);
+        span.to = span.to.max(end);
         self.extending = Some(e);
     }
 
@@ -1239,10 +1290,7 @@ impl SpectralMatcher {
             .filter(|&f| {
                 let centre = f * hop + win / 2;
                 self.levels[(f % cap) as usize] >= peak - GUARD_DB
-                    && !self
-                        .recognised
-                        .iter()
-                        .any(|&(a, b)| a != u64::MAX && centre >= a && centre <= b)
+                    && !self.recognised.iter().any(|span| span.holds(centre))
             })
             .count()
             >= needed
@@ -1274,8 +1322,8 @@ impl SpectralMatcher {
             + self.hop() as i64 / 2)
             .max(h.begin_sample as i64 + 1) as u64;
         for span in &mut self.recognised {
-            if span.1 == u64::MAX {
-                span.1 = end_sample;
+            if span.to == u64::MAX {
+                span.to = end_sample;
             }
         }
         let lo = h
