@@ -109,6 +109,18 @@ struct PatternInfo {
     power: f64,
 }
 
+/// What an onset's first window showed ([`SpectralMatcher::first_look`]): its best
+/// pattern, the evidence that does not depend on the pattern, the energy of its
+/// decision window and its peak level (dB of sound). Kept while its decision waits for
+/// more windows, so that every gate judges the first window once.
+#[derive(Clone, Copy)]
+struct FirstLook {
+    best: usize,
+    context: Evidence,
+    early: f64,
+    peak: f32,
+}
+
 #[derive(Clone, Copy)]
 struct PendingOnset {
     /// Frame at which the onset was detected.
@@ -213,6 +225,8 @@ pub struct SpectralMatcher {
     /// until it ends.
     recognised: [RecognisedSpan; RECOGNISED_SPANS],
     recognised_next: usize,
+    /// The first look at the onset whose decision waits for more windows.
+    waiting: Option<FirstLook>,
     /// The newest recognised impulse, whose span grows while its sound goes on.
     extending: Option<ExtendingSpan>,
     speech_guard_seconds: f64,
@@ -538,6 +552,7 @@ impl SpectralMatcher {
             finished: false,
             recognised: [RecognisedSpan::NONE; RECOGNISED_SPANS],
             recognised_next: 0,
+            waiting: None,
             extending: None,
             speech_guard_seconds: settings.speech_guard_seconds,
             gates: GateParams {
@@ -826,42 +841,19 @@ impl SpectralMatcher {
         windows: usize,
         out: &mut Vec<Event>,
     ) -> Option<usize> {
-        if self.collected.is_some() {
-            let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
-            if peak - pre >= self.gates.pre_quiet_db {
-                self.pool_instance(onset_frame);
-                if let Some(collected) = &mut self.collected {
-                    collected.extend_from_slice(&self.instance);
-                }
-            }
-        }
-        if self.templates.is_empty() {
-            return None;
-        }
-        self.score_patterns(onset_frame);
-        let mut pi = 0;
-        for (p, s) in self.pattern_scores.iter().enumerate() {
-            if s.score > self.pattern_scores[pi].score {
-                pi = p;
-            }
-        }
-        let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
-        // Once per onset, so that the explanation has it too: a sum over the 25 ms
-        // window, next to the pooling of every shift that scoring did.
-        let early = self.decision_window_energy(time_sample);
-        // What does not depend on the pattern, once.
-        let context = Evidence {
-            rise_db: peak - pre,
-            over_fired_sound: self.over_fired_sound(time_sample),
-            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
-            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
-            background_score: self.background_score,
-            best_score: f32::NEG_INFINITY,
-            best_is_impulse: false,
-            threshold: 0.0,
-            held_by_best_pattern: false,
-            strength: 0.0,
+        // An onset back for more windows was looked at once already: its scores (still
+        // in `pattern_scores`, as no other onset is classified before it is decided)
+        // and its evidence are those of its first window.
+        let first_look = match self.waiting.take() {
+            Some(look) if windows > 1 => look,
+            _ => self.first_look(time_sample, onset_frame)?,
         };
+        let FirstLook {
+            best: mut pi,
+            context,
+            early,
+            peak,
+        } = first_look;
         let mut evidence = self.as_instance_of(pi, &context, early);
         let mut outcome = decide(&evidence, &self.gates);
         // An onset that fires, whose runner-up is a pattern one window cannot tell from
@@ -875,6 +867,7 @@ impl SpectralMatcher {
                 && self.pattern_scores[q].score >= self.patterns[q].threshold
             {
                 if windows < needed {
+                    self.waiting = Some(first_look);
                     return Some(needed);
                 }
                 parted_over = needed;
@@ -985,6 +978,50 @@ impl SpectralMatcher {
         }
         out.push(decided);
         None
+    }
+
+    /// Scores the onset at `time_sample` (frame `onset_frame`) over its first window and
+    /// gathers the evidence that does not depend on the pattern; `None` without patterns
+    /// (a matcher that only collects onsets' features for a background model).
+    fn first_look(&mut self, time_sample: u64, onset_frame: u64) -> Option<FirstLook> {
+        let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
+        if self.collected.is_some() && peak - pre >= self.gates.pre_quiet_db {
+            self.pool_instance(onset_frame);
+            if let Some(collected) = &mut self.collected {
+                collected.extend_from_slice(&self.instance);
+            }
+        }
+        if self.templates.is_empty() {
+            return None;
+        }
+        self.score_patterns(onset_frame);
+        let mut best = 0;
+        for (p, s) in self.pattern_scores.iter().enumerate() {
+            if s.score > self.pattern_scores[best].score {
+                best = p;
+            }
+        }
+        // Once per onset, so that the explanation has it too: a sum over the 25 ms
+        // window, next to the pooling of every shift that scoring did.
+        let early = self.decision_window_energy(time_sample);
+        let context = Evidence {
+            rise_db: peak - pre,
+            over_fired_sound: self.over_fired_sound(time_sample),
+            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
+            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+            background_score: self.background_score,
+            best_score: f32::NEG_INFINITY,
+            best_is_impulse: false,
+            threshold: 0.0,
+            held_by_best_pattern: false,
+            strength: 0.0,
+        };
+        Some(FirstLook {
+            best,
+            context,
+            early,
+            peak,
+        })
     }
 
     /// The evidence about the onset being classified as an instance of pattern `pi`:
