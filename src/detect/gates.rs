@@ -57,12 +57,10 @@ pub struct GateParams {
     /// begins over the tail of the word before) and its best pattern, an impulse,
     /// scores at least this. The gate is there to keep the consonants inside
     /// unrecognised sound (speech) out; over a recognised word it would stop every
-    /// word said before the last one died away. An onset inside a word matches its
-    /// own pattern less well than a new word does (the rhythms' new words score
-    /// 0.97-1.00 there, a hit's or a word's own later sound mostly under 0.9), and
-    /// a held pattern's sound is what a word's vowel is made of, so only impulses
-    /// qualify. Swept over every dev set and the other voices (`docs/quiet-before.md`):
-    /// 0.9-0.97 is a plateau.
+    /// word said before the last one died away. An onset inside a word or a hit
+    /// matches the patterns less well than a new word does, and a held pattern's
+    /// sound is what a word's vowel is made of, so only clear impulses qualify. The
+    /// sweep and the scores behind it: `docs/quiet-before.md`.
     pub over_fired_score: f32,
     /// A sound whose nearest background sound scores this much more than its best
     /// pattern is taken for speech (`docs/background.md`).
