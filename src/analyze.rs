@@ -164,7 +164,7 @@ pub fn write_json(
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most
 /// with their scores, its strength, the nearest background sound's score, its rise
-/// (marked `*` when it began over a sound that fired), how much of its sound the
+/// (marked `*` when it began over an impulse that fired), how much of its sound the
 /// choice of its pattern heard, and what became of it (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
@@ -186,7 +186,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             num(r.strength),
             num(r.background_score),
             r.rise_db.map_or("-".to_string(), |v| {
-                let over_a_word = if r.over_fired_sound { "*" } else { "" };
+                let over_a_word = if r.over_fired_impulse { "*" } else { "" };
                 format!("{v:.1}{over_a_word}")
             }),
             r.window_seconds

@@ -723,7 +723,7 @@ fn explain_lists_every_onset_with_what_became_of_it() {
     }
     // The rise above the quiet before the onset is what the first gate judged: under
     // 10 dB for every onset it stopped, at least 10 dB for every other scored one,
-    // unless it began over a sound that fired and an impulse pattern scored 0.95 (an
+    // unless it began over an impulse that fired and an impulse pattern scored 0.95 (an
     // onset placed on the attack of one that fired is not scored).
     let config = onomato::Config::load(&root().join("config/onomato.toml")).unwrap();
     let held: Vec<String> = config
@@ -737,9 +737,9 @@ fn explain_lists_every_onset_with_what_became_of_it() {
         let rise = o["rise_db"]
             .as_f64()
             .unwrap_or_else(|| panic!("no rise_db: {o}"));
-        let over_a_word = o["over_fired_sound"]
+        let over_a_word = o["over_fired_impulse"]
             .as_bool()
-            .unwrap_or_else(|| panic!("no over_fired_sound: {o}"));
+            .unwrap_or_else(|| panic!("no over_fired_impulse: {o}"));
         let impulse = held.iter().all(|name| o["best"] != *name);
         let excused = over_a_word && impulse && o["best_score"].as_f64().unwrap() >= 0.95;
         assert_eq!(

@@ -507,7 +507,7 @@ fn a_word_said_over_the_tail_of_a_word_that_fired_is_found() {
         .iter()
         .filter(|r| {
             r.outcome == onomato::detect::gates::Outcome::Fired
-                && r.over_fired_sound
+                && r.over_fired_impulse
                 && r.rise_db.is_some_and(|rise| rise < 10.0)
         })
         .count();

@@ -13,7 +13,7 @@ pub enum Outcome {
     Fired,
     /// The 10-40 ms before the onset were within `pre_quiet_db` of its peak: it
     /// continues a sound (a consonant after a vowel). Not asked of an impulse that
-    /// scores `over_fired_score` over the tail of a sound that fired.
+    /// scores `over_fired_score` over the tail of an impulse that fired.
     QuietBefore,
     /// The speech guard: it follows unrecognised sound.
     SpeechGuard,
@@ -53,7 +53,7 @@ impl Outcome {
 pub struct GateParams {
     /// A sound must rise this far (dB) above the 10-40 ms before its onset...
     pub pre_quiet_db: f32,
-    /// ...unless those 10-40 ms lie in a sound that fired (a word of a quick rhythm
+    /// ...unless those 10-40 ms lie in an impulse that fired (a word of a quick rhythm
     /// begins over the tail of the word before) and its best pattern, an impulse,
     /// scores at least this. The gate is there to keep the consonants inside
     /// unrecognised sound (speech) out; over a recognised word it would stop every
@@ -85,8 +85,8 @@ impl Default for GateParams {
 pub struct Evidence {
     /// The sound's peak over the 10-40 ms before its onset, dB.
     pub rise_db: f32,
-    /// Some of those 10-40 ms lie in a sound that fired.
-    pub over_fired_sound: bool,
+    /// Some of those 10-40 ms lie in an impulse that fired.
+    pub over_fired_impulse: bool,
     /// The speech guard's span before the onset held enough unrecognised sound.
     pub follows_unrecognised_sound: bool,
     /// It is the last fired impulse's own later sound.
@@ -108,7 +108,7 @@ impl Evidence {
     /// fired with this one a clear instance of an impulse pattern.
     pub fn continues_a_sound(&self, params: &GateParams) -> bool {
         self.rise_db < params.pre_quiet_db
-            && !(self.over_fired_sound
+            && !(self.over_fired_impulse
                 && self.best_is_impulse
                 && self.best_score >= params.over_fired_score)
     }
@@ -153,7 +153,7 @@ mod tests {
     fn clear() -> Evidence {
         Evidence {
             rise_db: 40.0,
-            over_fired_sound: false,
+            over_fired_impulse: false,
             follows_unrecognised_sound: false,
             continues_last_impulse: false,
             best_score: 0.8,
@@ -234,7 +234,7 @@ mod tests {
         let p = GateParams::default();
         let over_a_word = Evidence {
             rise_db: 3.0,
-            over_fired_sound: true,
+            over_fired_impulse: true,
             best_score: 0.97,
             ..clear()
         };
@@ -242,7 +242,7 @@ mod tests {
         for (e, why) in [
             (
                 Evidence {
-                    over_fired_sound: false,
+                    over_fired_impulse: false,
                     ..over_a_word
                 },
                 "over unrecognised sound",

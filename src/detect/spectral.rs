@@ -8,7 +8,7 @@
 //! onset as many samples later and the same strength, wherever the frames fall). The
 //! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
 //! here: it must stand 10 dB out of the 40-10 ms before it (a consonant inside speech
-//! follows a vowel) unless that sound is a word that fired and it is clearly an
+//! follows a vowel) unless that sound is an impulse that fired and it is clearly an
 //! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
 //! so on. The levels they compare are the sound in a frame, its
 //! power less twice the room's noise (`sound_level_db`), so that noise just under a
@@ -305,10 +305,10 @@ pub struct OnsetRecord {
     /// quiet-before gate asks for 10).
     #[serde(serialize_with = "super::opt_db")]
     pub rise_db: Option<f64>,
-    /// Some of those 10-40 ms lie in a sound that fired: the onset begins over a
+    /// Some of those 10-40 ms lie in an impulse that fired: the onset begins over a
     /// recognised word's tail, and an impulse pattern scoring `over_fired_score` there
     /// is not held to the rise.
-    pub over_fired_sound: bool,
+    pub over_fired_impulse: bool,
     /// The sound the choice of its pattern was made on, seconds from the onset: one
     /// decision window, or more when its two best patterns are alike over one
     /// ([`separating_windows`]).
@@ -363,7 +363,8 @@ const RECOGNISED_SPANS: usize = 8;
 struct RecognisedSpan {
     from: u64,
     to: u64,
-    /// It fired (rather than being a pattern's sound that only the guard stopped).
+    /// An impulse that fired (rather than a held sound, or a pattern's sound that
+    /// only the guard stopped).
     fired: bool,
 }
 
@@ -825,7 +826,7 @@ impl SpectralMatcher {
                 strength: None,
                 background_score: None,
                 rise_db: None,
-                over_fired_sound: false,
+                over_fired_impulse: false,
                 window_seconds: None,
                 outcome,
             });
@@ -904,7 +905,7 @@ impl SpectralMatcher {
                     .rise_db
                     .is_finite()
                     .then_some(f64::from(evidence.rise_db)),
-                over_fired_sound: evidence.over_fired_sound,
+                over_fired_impulse: evidence.over_fired_impulse,
                 window_seconds: Some(self.heard_seconds(parted_over)),
                 outcome,
             };
@@ -950,7 +951,7 @@ impl SpectralMatcher {
         } else {
             time_sample + take_length
         };
-        let slot = self.cover(time_sample, span_end, true);
+        let slot = self.cover(time_sample, span_end, info.kind == PatternKind::Impulse);
         let info = &self.patterns[pi];
         self.extending = (info.kind == PatternKind::Impulse).then_some(ExtendingSpan {
             slot,
@@ -1006,7 +1007,7 @@ impl SpectralMatcher {
         let early = self.decision_window_energy(time_sample);
         let context = Evidence {
             rise_db: peak - pre,
-            over_fired_sound: self.over_fired_sound(time_sample),
+            over_fired_impulse: self.over_fired_impulse(time_sample),
             follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
             continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
             background_score: self.background_score,
@@ -1076,8 +1077,8 @@ impl SpectralMatcher {
     }
 
     /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
-    /// guard (from 10 ms before the onset, as the guard looks), and whether it fired;
-    /// returns its slot.
+    /// guard (from 10 ms before the onset, as the guard looks), and whether it is an
+    /// impulse that fired; returns its slot.
     fn cover(&mut self, time_sample: u64, end: u64, fired: bool) -> usize {
         let slot = self.recognised_next;
         self.recognised[slot] = RecognisedSpan {
@@ -1109,9 +1110,11 @@ impl SpectralMatcher {
     }
 
     /// Whether a frame of the quiet-before span of the onset at `time_sample` lies in
-    /// a sound that fired: the onset then begins over that word's tail, not inside
-    /// sound that no pattern recognised (judged by the sample at a frame's centre).
-    fn over_fired_sound(&self, time_sample: u64) -> bool {
+    /// an impulse that fired: the onset then begins over that word's tail, not inside
+    /// sound that no pattern recognised (judged by the sample at a frame's centre). A
+    /// held sound that fired does not count: a voice's vowel in speech can start one,
+    /// and the syllables after it would then be excused.
+    fn over_fired_impulse(&self, time_sample: u64) -> bool {
         let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
         let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
         let (hop, win) = (self.hop() as u64, self.analyzer.win as u64);
