@@ -420,17 +420,14 @@ impl SpectralMatcher {
         let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
         // the onset (the onset frame is centred on it), shift tolerance included.
-        let decision_frames = (((settings.decision_seconds - WINDOW_SECONDS / 2.0) / HOP_SECONDS)
-            .floor() as usize)
-            .saturating_sub(MAX_SHIFT)
-            .max(2);
+        let frames_reaching = |seconds: f64| {
+            (((seconds - WINDOW_SECONDS / 2.0) / HOP_SECONDS).floor() as usize)
+                .saturating_sub(MAX_SHIFT)
+        };
+        let decision_frames = frames_reaching(settings.decision_seconds).max(2);
         // As many whole windows as reach no further than `max_decision_seconds`.
-        let allowed_windows = ((((settings.max_decision_seconds - WINDOW_SECONDS / 2.0)
-            / HOP_SECONDS)
-            .floor() as usize)
-            .saturating_sub(MAX_SHIFT)
-            / decision_frames)
-            .max(1);
+        let allowed_windows =
+            (frames_reaching(settings.max_decision_seconds) / decision_frames).max(1);
         let mut templates = Vec::new();
         let mut infos = Vec::new();
         for (pi, p) in patterns.iter().enumerate() {
@@ -1100,8 +1097,7 @@ impl SpectralMatcher {
         let peak = (onset_frame..self.frame_count)
             .map(|f| self.levels[(f % cap) as usize])
             .fold(f32::NEG_INFINITY, f32::max);
-        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
-        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
+        let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         let pre = self
             .frames_inside(quiet_from, quiet_to)
             .map(|f| self.levels[(f % cap) as usize])
@@ -1115,15 +1111,25 @@ impl SpectralMatcher {
     /// held sound that fired does not count: a voice's vowel in speech can start one,
     /// and the syllables after it would then be excused.
     fn over_fired_impulse(&self, time_sample: u64) -> bool {
-        let quiet_from = time_sample.saturating_sub((PRE_QUIET_FROM_SECONDS * self.rate) as u64);
-        let quiet_to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
-        let (hop, win) = (self.hop() as u64, self.analyzer.win as u64);
+        let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         self.frames_inside(quiet_from, quiet_to).any(|f| {
-            let centre = f * hop + win / 2;
+            let centre = self.frame_centre(f);
             self.recognised
                 .iter()
                 .any(|span| span.fired && span.holds(centre))
         })
+    }
+
+    /// The samples `[from, to)` before the onset at `time_sample` that its sound must
+    /// rise out of (`PRE_QUIET_FROM_SECONDS` to `PRE_QUIET_TO_SECONDS` before it).
+    fn quiet_before_span(&self, time_sample: u64) -> (u64, u64) {
+        let before = |seconds: f64| time_sample.saturating_sub((seconds * self.rate) as u64);
+        (before(PRE_QUIET_FROM_SECONDS), before(PRE_QUIET_TO_SECONDS))
+    }
+
+    /// The sample at the centre of frame `f`'s window.
+    fn frame_centre(&self, f: u64) -> u64 {
+        f * self.hop() as u64 + self.analyzer.win as u64 / 2
     }
 
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
@@ -1300,7 +1306,7 @@ impl SpectralMatcher {
     fn extend_recognised(&mut self, f: u64) {
         let Some(mut e) = self.extending else { return };
         let level = self.levels[(f % self.frame_capacity as u64) as usize];
-        let centre = f * self.hop() as u64 + self.analyzer.win as u64 / 2;
+        let centre = self.frame_centre(f);
         if level < e.peak_db - SOUND_DROP_DB || centre > e.limit {
             self.extending = None;
             return;
@@ -1322,13 +1328,12 @@ impl SpectralMatcher {
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
         let hop = self.hop() as u64;
-        let win = self.analyzer.win as u64;
         let from = time_sample.saturating_sub((self.speech_guard_seconds * self.rate) as u64);
         let to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
         let needed = (GUARD_SOUND_SECONDS * self.rate / hop as f64).ceil() as usize;
         self.frames_inside(from, to)
             .filter(|&f| {
-                let centre = f * hop + win / 2;
+                let centre = self.frame_centre(f);
                 self.levels[(f % cap) as usize] >= peak - GUARD_DB
                     && !self.recognised.iter().any(|span| span.holds(centre))
             })
