@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod common;
-use common::root;
+use common::{root, temp_dir};
 
 fn onomato(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_onomato"))
@@ -185,8 +185,7 @@ fn the_example_script_rebuilds_an_example_that_is_found() {
             "{tool} is needed to rebuild the example: run scripts/test.sh, which installs it"
         );
     }
-    let dir = std::env::temp_dir().join(format!("onomato-example-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = temp_dir("example");
     let script = root().join("examples/make-example.sh");
     let made = Command::new("bash")
         .arg(&script)
@@ -444,8 +443,7 @@ fn check_accepts_the_example_and_refuses_a_broken_config() {
     assert!(stderr(&out).contains("configuration is valid"));
     assert!(stderr(&out).contains("pattern 'hoo' (continuous): 1 take(s)"));
 
-    let dir = std::env::temp_dir().join(format!("onomato-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("check");
     let broken = dir.join("broken.toml");
     std::fs::write(
         &broken,
@@ -580,8 +578,7 @@ fn devices_lists_audio_inputs_and_midi_ports() {
 #[test]
 fn analyze_shows_a_progress_bar_in_a_terminal_and_nothing_otherwise() {
     // Ten minutes of audio: the example sixty times.
-    let dir = std::env::temp_dir().join(format!("onomato-cli-progress-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("progress");
     let mut reader = hound::WavReader::open(root().join("examples/beat.wav")).unwrap();
     let spec = reader.spec();
     let samples: Vec<i16> = reader.samples::<i16>().map(Result::unwrap).collect();

@@ -109,9 +109,12 @@ pub fn rms(x: &[f32]) -> f64 {
     (x.iter().map(|&v| f64::from(v) * f64::from(v)).sum::<f64>() / x.len() as f64).sqrt()
 }
 
-/// A fresh, empty folder for one test.
+/// A fresh, empty folder for one test, in the build's own temporary folder (under
+/// `target/`, so that test runs leave nothing in the system's): one per test binary and
+/// name, emptied when a run asks for it again.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("onomato-test-{}-{name}", std::process::id()));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("onomato-test-{}-{name}", env!("CARGO_CRATE_NAME")));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");
     dir
