@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Synthesises the speech of the built-in background model (src/detect/background.rs):
-# the English text of scripts/background/en.txt read by twelve espeak-ng voices, and a
+# the English text of scripts/background/en.txt read by 24 espeak-ng voices, and a
 # sentence each in German, French and Spanish. None is a voice of the development sets
-# (en+m1, en+m2, en+m7, en-us+f3, en-gb-x-rp+f1) or the plain voice the tests speak with.
+# (en+m1, en+m2, en+m7, en-us+f3, en-gb-x-rp+f1), of scripts/other-voices.py, or the
+# plain voice the tests speak with.
 # Writes mono 32-bit float WAVs at the working rate, 22.05 kHz, into OUT_DIR; then
 #   cargo run --release --example background_model -- OUT_DIR src/detect/background.bin
 # Needs espeak-ng and sox.
@@ -20,7 +21,8 @@ speak() { # NAME VOICE TEXT_FILE
 }
 i=0
 for voice in en+f2 en+f4 en+m3 en+m5 en-us+m4 en+klatt3 en+Andy en+Annie \
-  en-gb-scotland+m6 en-029+f5 en+grandma en+Storm; do
+  en-gb-scotland+m6 en-029+f5 en+grandma en+Storm en+adam en+Alex en+boris en+caleb \
+  en+john en+max en+michel en+norbert en+travis en+victor en+belinda en+Alicia; do
   speak "en_$i" "$voice" "$here/background/en.txt"
   i=$((i + 1))
 done

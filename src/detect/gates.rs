@@ -74,7 +74,7 @@ impl Default for GateParams {
         Self {
             pre_quiet_db: 10.0,
             over_fired_score: 0.95,
-            background_margin: 0.05,
+            background_margin: 0.06,
             min_strength: 0.06,
         }
     }
