@@ -204,7 +204,8 @@ mod tests {
             ),
             (
                 Evidence {
-                    background_score: 0.85,
+                    // The background nearer than the pattern by the margin.
+                    background_score: clear().best_score + p.background_margin,
                     ..clear()
                 },
                 Outcome::Background,
