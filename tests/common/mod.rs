@@ -110,11 +110,12 @@ pub fn rms(x: &[f32]) -> f64 {
 }
 
 /// A fresh, empty folder for one test, in the build's own temporary folder (under
-/// `target/`, so that test runs leave nothing in the system's): one per test binary and
-/// name, emptied when a run asks for it again.
+/// `target/`, so that test runs leave nothing in the system's; the system's for the
+/// examples that share this module, which Cargo gives no such folder): one per binary
+/// and name, emptied when a run asks for it again.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("onomato-test-{}-{name}", env!("CARGO_CRATE_NAME")));
+    let base = option_env!("CARGO_TARGET_TMPDIR").map_or_else(std::env::temp_dir, PathBuf::from);
+    let dir = base.join(format!("onomato-test-{}-{name}", env!("CARGO_CRATE_NAME")));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");
     dir
