@@ -184,6 +184,11 @@ fn word(dir: &Path, name: &str, text: &str, speed: &str) -> Vec<f32> {
 /// The voice's words "tick", "pop", "pew", "boom" and its held "shhh" and "hooo", said
 /// at 175 words per minute, as patterns.
 fn enrolled_words(dir: &Path, settings: &DetectorSettings) -> Vec<Pattern> {
+    enrolled_words_at(dir, settings, "175")
+}
+
+/// As [`enrolled_words`], said at `speed` words a minute.
+fn enrolled_words_at(dir: &Path, settings: &DetectorSettings, speed: &str) -> Vec<Pattern> {
     let words = [
         ("tick", "tick", PatternKind::Impulse),
         ("pop", "pop", PatternKind::Impulse),
@@ -195,7 +200,7 @@ fn enrolled_words(dir: &Path, settings: &DetectorSettings) -> Vec<Pattern> {
     words
         .iter()
         .map(|(name, text, kind)| {
-            let take = word(dir, name, text, "175");
+            let take = word(dir, name, text, speed);
             Pattern::from_samples(name, *kind, vec![take], settings).unwrap()
         })
         .collect()
@@ -264,12 +269,24 @@ fn said_alone_are_found(
     words: &[&'static str],
     seed: u64,
 ) {
+    said_alone_at_are_found(dir, patterns, settings, words, seed, "140");
+}
+
+/// As [`said_alone_are_found`], the words said at `speed` words a minute.
+fn said_alone_at_are_found(
+    dir: &Path,
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+    words: &[&'static str],
+    seed: u64,
+    speed: &str,
+) {
     let mut rec = vec![0.0f32; samples_for(0.5, RATE)];
     let mut truth = Vec::new();
     let mut rng = Rng::new(seed);
     for round in 0..3 {
         for &name in words {
-            let said = word(dir, &format!("{name}-alone-{round}"), name, "140");
+            let said = word(dir, &format!("{name}-alone-{round}"), name, speed);
             let gain = 10f32.powf(rng.range(-9.0, 0.0) as f32 / 20.0);
             truth.push((name, rec.len() as f64 / f64::from(RATE)));
             rec.extend(said.iter().map(|v| v * gain));
@@ -515,6 +532,26 @@ fn a_word_said_over_the_tail_of_a_word_that_fired_is_found() {
         over_a_tail >= 2,
         "{over_a_tail} words fired over a word's tail without rising 10 dB:\n{table}"
     );
+}
+
+/// Issue: a voice whose "p" lasts nearly as long as the wait (espeak-ng's at 130 words a
+/// minute: "pop" and "pew" alike 1.00, 1.00 and 0.76 over one, two and three decision
+/// windows) never fell under the similarity at which a pair counts as parted, so it
+/// never waited, and one was taken for the other (on an unheard voice, 24 of 50). Such
+/// a pair now waits for the windows that part it most: said alone three times each at
+/// 120 words a minute and at several levels, each is found as itself.
+#[test]
+fn pop_and_pew_whose_p_lasts_as_long_as_the_wait_are_told_apart() {
+    let dir = temp_dir("pop-pew-slow");
+    let settings = spectral();
+    let patterns = impulses(enrolled_words_at(&dir, &settings, "130"));
+    let pairs = onomato::pattern::look_alike_patterns(patterns.clone(), &settings).unwrap();
+    let pair = pairs
+        .iter()
+        .find(|p| p.involves("pop") && p.involves("pew"))
+        .unwrap_or_else(|| panic!("pop and pew not alike: {pairs:?}"));
+    assert!(pair.decided_after_seconds.is_some(), "no wait: {pair}");
+    said_alone_at_are_found(&dir, &patterns, &settings, &["pop", "pew"], 11, "120");
 }
 
 /// Issue: "pew", whose attack is soft and voiced in some voices, was never found. Said
