@@ -255,25 +255,14 @@ fn speech_by_the_enrolled_voice_is_not_taken_for_its_words_said_alone() {
     // own.
     let alone_patterns = without(patterns, "pew");
     for (words, seed) in [(&["pop", "boom"][..], 5), (&["tick"][..], 6)] {
-        said_alone_are_found(&dir, &alone_patterns, &settings, words, seed);
+        said_alone_are_found(&dir, &alone_patterns, &settings, words, seed, "140");
     }
 }
 
-/// Three rounds of `words`, each said alone at speed 140 with a gain of -9..0 dB and
-/// 0.3-0.8 s of silence after it: at least 90% must be found within 50 ms of their
-/// onset, none with another label, and no word may give more than two events.
+/// Three rounds of `words`, each said alone at `speed` words a minute with a gain of
+/// -9..0 dB and 0.3-0.8 s of silence after it: at least 90% must be found within 50 ms
+/// of their onset, none with another label, and no word may give more than two events.
 fn said_alone_are_found(
-    dir: &Path,
-    patterns: &[Pattern],
-    settings: &DetectorSettings,
-    words: &[&'static str],
-    seed: u64,
-) {
-    said_alone_at_are_found(dir, patterns, settings, words, seed, "140");
-}
-
-/// As [`said_alone_are_found`], the words said at `speed` words a minute.
-fn said_alone_at_are_found(
     dir: &Path,
     patterns: &[Pattern],
     settings: &DetectorSettings,
@@ -551,7 +540,7 @@ fn pop_and_pew_whose_p_lasts_as_long_as_the_wait_are_told_apart() {
         .find(|p| p.involves("pop") && p.involves("pew"))
         .unwrap_or_else(|| panic!("pop and pew not alike: {pairs:?}"));
     assert!(pair.decided_after_seconds.is_some(), "no wait: {pair}");
-    said_alone_at_are_found(&dir, &patterns, &settings, &["pop", "pew"], 11, "120");
+    said_alone_are_found(&dir, &patterns, &settings, &["pop", "pew"], 11, "120");
 }
 
 /// Issue: "pew", whose attack is soft and voiced in some voices, was never found. Said
@@ -562,7 +551,7 @@ fn a_soft_attack_pew_said_alone_is_found() {
     let dir = temp_dir("pew");
     let settings = spectral();
     let patterns = without(enrolled_words(&dir, &settings), "pop");
-    said_alone_are_found(&dir, &patterns, &settings, &["pew"], 7);
+    said_alone_are_found(&dir, &patterns, &settings, &["pew"], 7, "140");
 }
 
 /// Issue: "pop" and "pew" of one voice share their first 25 ms (the "p" and its
@@ -586,5 +575,5 @@ fn pop_and_pew_which_share_their_first_25_ms_are_told_apart() {
         after > settings.decision_seconds && after <= settings.max_decision_seconds + 1e-9,
         "{pair}"
     );
-    said_alone_are_found(&dir, &patterns, &settings, &["pop", "pew"], 9);
+    said_alone_are_found(&dir, &patterns, &settings, &["pop", "pew"], 9, "140");
 }

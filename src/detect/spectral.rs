@@ -1079,7 +1079,7 @@ impl SpectralMatcher {
     fn cover(&mut self, time_sample: u64, end: u64, fired: bool) -> usize {
         let slot = self.recognised_next;
         self.recognised[slot] = RecognisedSpan {
-            from: time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64),
+            from: self.quiet_before_span(time_sample).1,
             to: end,
             fired,
         };
@@ -1329,7 +1329,7 @@ impl SpectralMatcher {
         let cap = self.frame_capacity as u64;
         let hop = self.hop() as u64;
         let from = time_sample.saturating_sub((self.speech_guard_seconds * self.rate) as u64);
-        let to = time_sample.saturating_sub((PRE_QUIET_TO_SECONDS * self.rate) as u64);
+        let to = self.quiet_before_span(time_sample).1;
         let needed = (GUARD_SOUND_SECONDS * self.rate / hop as f64).ceil() as usize;
         self.frames_inside(from, to)
             .filter(|&f| {
