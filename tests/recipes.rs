@@ -78,11 +78,17 @@ fn the_pure_data_patch_routes_each_pattern_to_its_outlet() {
         .map(|l| l.split(',').nth(1).unwrap().replace("hoo", "hoo-begin"))
         .collect();
     assert_eq!(routed, expected, "Pd printed:\n{text}");
-    // The arguments arrive as numbers: strength, time, id.
+    // The arguments arrive as numbers: strength, time, id, then the time exactly as
+    // whole seconds and a fraction.
     let first_tick = &lines.iter().find(|(n, _)| *n == "tick").unwrap().1;
-    assert_eq!(first_tick.len(), 3, "{first_tick:?}");
+    assert_eq!(first_tick.len(), 5, "{first_tick:?}");
     assert!(
         (first_tick[1] - 0.4).abs() < 0.001 && first_tick[2] == 0.0,
+        "{first_tick:?}"
+    );
+    assert!(
+        first_tick[3] == first_tick[1].floor()
+            && (first_tick[3] + first_tick[4] - first_tick[1]).abs() < 1e-5,
         "{first_tick:?}"
     );
     // Every held sound's end comes out of its own outlet, after its begin.

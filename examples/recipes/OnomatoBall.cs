@@ -43,11 +43,13 @@ public class OnomatoBall : MonoBehaviour
             {
                 lock (_lock) { _stateHeight = data.GetElementAsFloat(0); _hasState = true; }
             });
-        // f strength, f time, i id: one message per "tick" (use your pattern names).
+        // f strength, f time, i id, then the time exactly as i seconds, f fraction: one
+        // message per "tick" (use your pattern names).
         _server.MessageDispatcher.AddCallback("/onomato/tick",
             (string address, OscDataHandle data) =>
             {
-                Debug.Log($"tick: strength {data.GetElementAsFloat(0)} at {data.GetElementAsFloat(1)} s");
+                double time = data.GetElementAsInt(3) + (double)data.GetElementAsFloat(4);
+                Debug.Log($"tick: strength {data.GetElementAsFloat(0)} at {time:F3} s");
             });
     }
 

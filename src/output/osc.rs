@@ -3,6 +3,11 @@
 //! and s, and explicit time arguments (receivers ignore bundle timetags); bundles with
 //! the onset as timetag on request.
 //!
+//! Each time goes out twice: as an `f` where the contract first put it, and, appended
+//! after every other argument, exactly as an `i` of whole seconds and an `f` fraction
+//! ([`exact_time`]). A 32-bit float keeps a millisecond only for the first 2^14 s of
+//! stream; the pair keeps 0.1 µs for 68 years, in types every receiver reads.
+//!
 //! Owned by the output thread. A target that cannot be resolved or does not answer is
 //! logged and retried; it never stops the daemon.
 
@@ -120,14 +125,17 @@ impl OscSink {
             (PatternKind::Impulse, _) => {
                 self.send(
                     &format!("/{pattern}"),
-                    vec![
-                        OscType::Float(strength),
-                        OscType::Float(time),
-                        OscType::Int(id),
-                    ],
+                    with_exact_times(
+                        vec![
+                            OscType::Float(strength),
+                            OscType::Float(time),
+                            OscType::Int(id),
+                        ],
+                        &[e.time],
+                    ),
                     e.time,
                 );
-                self.send_generic(e, "impulse", time, pitch);
+                self.send_generic(e, "impulse", e.time, pitch);
             }
             (PatternKind::Continuous, None) => {
                 self.send_begin(e);
@@ -138,16 +146,19 @@ impl OscSink {
                 }
                 self.send(
                     &format!("/{pattern}/end"),
-                    vec![
-                        OscType::Float(strength),
-                        OscType::Float(end as f32),
-                        OscType::Int(id),
-                        OscType::Float(time),
-                        OscType::Float(pitch),
-                    ],
+                    with_exact_times(
+                        vec![
+                            OscType::Float(strength),
+                            OscType::Float(end as f32),
+                            OscType::Int(id),
+                            OscType::Float(time),
+                            OscType::Float(pitch),
+                        ],
+                        &[end, e.time],
+                    ),
                     end,
                 );
-                self.send_generic(e, "end", end as f32, pitch);
+                self.send_generic(e, "end", end, pitch);
             }
         }
     }
@@ -155,28 +166,35 @@ impl OscSink {
     fn send_begin(&mut self, e: &Event) {
         self.send(
             &format!("/{}/begin", e.pattern),
-            vec![
-                OscType::Float(e.strength as f32),
-                OscType::Float(e.time as f32),
-                OscType::Int(e.id as i32),
-            ],
+            with_exact_times(
+                vec![
+                    OscType::Float(e.strength as f32),
+                    OscType::Float(e.time as f32),
+                    OscType::Int(e.id as i32),
+                ],
+                &[e.time],
+            ),
             e.time,
         );
         self.send_generic(e, "begin", -1.0, 0.0);
     }
 
-    fn send_generic(&mut self, e: &Event, kind: &str, end: f32, pitch: f32) {
+    /// `/event`: `end` is an impulse's own time and −1 for a begin.
+    fn send_generic(&mut self, e: &Event, kind: &str, end: f64, pitch: f32) {
         self.send(
             "/event",
-            vec![
-                OscType::String(e.pattern.to_string()),
-                OscType::String(kind.to_string()),
-                OscType::Float(e.strength as f32),
-                OscType::Float(e.time as f32),
-                OscType::Float(end),
-                OscType::Int(e.id as i32),
-                OscType::Float(pitch),
-            ],
+            with_exact_times(
+                vec![
+                    OscType::String(e.pattern.to_string()),
+                    OscType::String(kind.to_string()),
+                    OscType::Float(e.strength as f32),
+                    OscType::Float(e.time as f32),
+                    OscType::Float(end as f32),
+                    OscType::Int(e.id as i32),
+                    OscType::Float(pitch),
+                ],
+                &[e.time, end],
+            ),
             e.time,
         );
     }
@@ -193,14 +211,17 @@ impl OscSink {
     pub fn send_bounce_hit(&mut self, hit: &LiveHit) {
         self.send(
             "/bounce/hit",
-            vec![
-                OscType::Float(hit.launch_velocity as f32),
-                OscType::Float(hit.time as f32),
-                OscType::Float(hit.predicted_landing as f32),
-                OscType::Float(hit.apex as f32),
-                OscType::Float(hit.squash as f32),
-                OscType::Int(hit.event as i32),
-            ],
+            with_exact_times(
+                vec![
+                    OscType::Float(hit.launch_velocity as f32),
+                    OscType::Float(hit.time as f32),
+                    OscType::Float(hit.predicted_landing as f32),
+                    OscType::Float(hit.apex as f32),
+                    OscType::Float(hit.squash as f32),
+                    OscType::Int(hit.event as i32),
+                ],
+                &[hit.time, hit.predicted_landing],
+            ),
             hit.time,
         );
     }
@@ -209,11 +230,14 @@ impl OscSink {
     pub fn send_bounce_state(&mut self, s: &BounceState) {
         self.send(
             "/bounce/state",
-            vec![
-                OscType::Float(s.height as f32),
-                OscType::Float(s.velocity as f32),
-                OscType::Float(s.time as f32),
-            ],
+            with_exact_times(
+                vec![
+                    OscType::Float(s.height as f32),
+                    OscType::Float(s.velocity as f32),
+                    OscType::Float(s.time as f32),
+                ],
+                &[s.time],
+            ),
             s.time,
         );
     }
@@ -231,13 +255,16 @@ impl OscSink {
         let clamp = |n: u64| n.min(i32::MAX as u64) as i32;
         self.send(
             "/status",
-            vec![
-                OscType::Float(stream_time as f32),
-                OscType::Int(clamp(events)),
-                OscType::Int(clamp(dropped)),
-                OscType::Int(clamp(overruns)),
-                OscType::Float(level_db),
-            ],
+            with_exact_times(
+                vec![
+                    OscType::Float(stream_time as f32),
+                    OscType::Int(clamp(events)),
+                    OscType::Int(clamp(dropped)),
+                    OscType::Int(clamp(overruns)),
+                    OscType::Float(level_db),
+                ],
+                &[stream_time],
+            ),
             stream_time,
         );
     }
@@ -290,5 +317,104 @@ impl OscSink {
                 }
             }
         }
+    }
+}
+
+/// A time in stream seconds as OSC 1.0 types: whole seconds (`i`, rounded down, so −1
+/// stays −1 with fraction 0) and the fraction of a second in [0, 1) (`f`).
+pub fn exact_time(seconds: f64) -> [OscType; 2] {
+    let whole = seconds.floor();
+    let fraction = (seconds - whole) as f32;
+    // An f32 just under 1 can round up to 1.0; carry it so the pair stays canonical.
+    let (whole, fraction) = if fraction >= 1.0 {
+        (whole + 1.0, 0.0)
+    } else {
+        (whole, fraction)
+    };
+    [
+        OscType::Int(whole.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32),
+        OscType::Float(fraction),
+    ]
+}
+
+/// `args` with the exact form of each of `times` appended, in order.
+fn with_exact_times(mut args: Vec<OscType>, times: &[f64]) -> Vec<OscType> {
+    for &t in times {
+        args.extend(exact_time(t));
+    }
+    args
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seconds_of(pair: &[OscType]) -> f64 {
+        match pair {
+            [OscType::Int(whole), OscType::Float(fraction)] => {
+                assert!((0.0..1.0).contains(fraction), "fraction {fraction}");
+                f64::from(*whole) + f64::from(*fraction)
+            }
+            other => panic!("not an exact time: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn exact_times_keep_a_microsecond_after_seven_days_where_f32_keeps_62_ms() {
+        let week = 7.0 * 86_400.0;
+        for t in [0.0, 0.0005, 1.25, 16_384.001, week + 0.0123, week + 0.9999999999] {
+            let back = seconds_of(&exact_time(t));
+            assert!((back - t).abs() < 1e-6, "{t} came back as {back}");
+        }
+        // What the f32 argument alone keeps there: the reason for the pair.
+        assert!(((week + 0.0123) as f32 as f64 - (week + 0.0123)).abs() > 0.01);
+        // A begin's "no end yet" stays −1 exactly.
+        assert_eq!(seconds_of(&exact_time(-1.0)), -1.0);
+    }
+
+    #[test]
+    fn an_impulse_a_week_into_the_stream_arrives_with_its_time_to_the_millisecond() {
+        let receiver = UdpSocket::bind("127.0.0.1:0").unwrap();
+        receiver
+            .set_read_timeout(Some(Duration::from_secs(2)))
+            .unwrap();
+        let settings = OscSettings {
+            targets: vec![receiver.local_addr().unwrap().to_string()],
+            prefix: "/onomato".into(),
+            bundle: false,
+            heartbeat_seconds: None,
+            bounce_state_rate: None,
+        };
+        let mut sink = OscSink::new(&settings, SystemTime::now());
+        let time = 7.0 * 86_400.0 + 1.2345;
+        let event = Event {
+            id: 3,
+            pattern: "tick".into(),
+            kind: PatternKind::Impulse,
+            time,
+            end: None,
+            strength: 0.8,
+            score: 0.9,
+            emitted_at: time + 0.02,
+            pitch: None,
+        };
+        sink.send_event(&event, false);
+        let mut buf = [0u8; 1024];
+        let mut received = Vec::new();
+        for _ in 0..2 {
+            let n = receiver.recv(&mut buf).unwrap();
+            match rosc::decoder::decode_udp(&buf[..n]).unwrap().1 {
+                OscPacket::Message(m) => received.push(m),
+                other => panic!("expected a message, got {other:?}"),
+            }
+        }
+        let impulse = received.iter().find(|m| m.addr == "/onomato/tick").unwrap();
+        assert_eq!(impulse.args.len(), 5);
+        assert_eq!(impulse.args[2], OscType::Int(3));
+        assert!((seconds_of(&impulse.args[3..5]) - time).abs() < 1e-3);
+        let generic = received.iter().find(|m| m.addr == "/onomato/event").unwrap();
+        assert_eq!(generic.args.len(), 11);
+        assert!((seconds_of(&generic.args[7..9]) - time).abs() < 1e-3);
+        assert!((seconds_of(&generic.args[9..11]) - time).abs() < 1e-3);
     }
 }
