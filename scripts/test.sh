@@ -20,6 +20,7 @@ packages=(
   coreutils                              # stdbuf
   puredata-core                          # the Pure Data recipe, run headless
   librsvg2-bin                           # rsvg-convert renders the plot in a test
+  systemd                                # systemd-analyze rates and checks the unit
 )
 bash scripts/install-packages.sh "${packages[@]}"
 
