@@ -661,6 +661,96 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
 }
 
 #[test]
+fn a_reader_of_printed_events_that_stops_for_10_s_costs_printed_lines_only() {
+    use std::os::fd::AsRawFd;
+    let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = common::temp_dir("listen-stalled-stdout");
+    let pulse = Pulse::start(&dir);
+    let osc = OscDump::start(&dir);
+    // stdout is a pipe filled to the brim before the daemon starts, and not read for
+    // the first 10 s: the daemon's first printed line blocks.
+    let (mut reader, mut writer) = std::io::pipe().unwrap();
+    let fd = writer.as_raw_fd();
+    // SAFETY: fcntl(2) on a descriptor this test owns.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) };
+    let mut filler = 0usize;
+    loop {
+        match std::io::Write::write(&mut writer, &[b'#'; 4096]) {
+            Ok(n) => filler += n,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+            Err(e) => panic!("filling the pipe: {e}"),
+        }
+    }
+    unsafe { libc::fcntl(fd, libc::F_SETFL, flags) };
+    let stderr = dir.join("listen.err");
+    let mut cmd = Command::new(BIN);
+    cmd.args([
+        "listen",
+        "-c",
+        "config/onomato.toml",
+        "--osc",
+        &osc.target(),
+    ])
+    .args(["--print", "json"])
+    .current_dir(root())
+    .env("RUST_LOG", "info")
+    .stdin(Stdio::null())
+    .stdout(writer)
+    .stderr(fs::File::create(&stderr).unwrap());
+    pulse.env(&mut cmd);
+    let stalled_at = Instant::now();
+    let d = Daemon {
+        child: cmd.spawn().expect("cannot start onomato"),
+        stdout: dir.join("unused"),
+        stderr: stderr.clone(),
+    };
+    // The command holds the pipe's other end: the reader would never see its end.
+    drop(cmd);
+    wait_for_text(&stderr, "listening", Duration::from_secs(10));
+    std::thread::sleep(Duration::from_millis(500));
+    let played_at = unix_now();
+    pulse.play("examples/beat.wav");
+    osc.wait_count(|m| m.addr == "/onomato/event", 15, Duration::from_secs(5));
+    // Every sound reached OSC as soon as it would with a reader, while nobody read.
+    let truth = example_truth();
+    let messages = osc.messages();
+    check_example_osc(&messages, None);
+    let impulses: Vec<&OscLine> = messages
+        .iter()
+        .filter(|m| m.addr.matches('/').count() == 2 && !m.addr.ends_with("/event"))
+        .collect();
+    for (m, t) in impulses.iter().zip(truth.iter().filter(|t| t.1 != "hoo")) {
+        let delay = m.arrival - (played_at + t.0);
+        assert!(
+            delay < 0.5,
+            "{m:?} arrived {delay:.3} s after its sound while stdout was not read"
+        );
+    }
+    std::thread::sleep(Duration::from_secs(10).saturating_sub(stalled_at.elapsed()));
+    let log = read(&stderr);
+    assert!(
+        !log.contains("delivered nothing") && !log.contains("open again"),
+        "the input was taken for dead while stdout was not read:\n{log}"
+    );
+    // The reader comes back: the printed lines were waiting, none was lost.
+    let drain = std::thread::spawn(move || {
+        let mut all = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut reader, &mut all);
+        all
+    });
+    let log = stop_cleanly(d);
+    let printed = String::from_utf8(drain.join().unwrap()).unwrap();
+    let lines: Vec<&str> = printed[filler..].lines().collect();
+    assert_eq!(lines.len(), 15, "{printed}");
+    for l in &lines {
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        assert!(v["pattern"].is_string(), "{l}");
+    }
+    assert!(log.contains("printed_lines_dropped=0"), "{log}");
+}
+
+#[test]
 fn the_daemon_outlives_a_crash_of_the_sound_server_and_captures_again() {
     let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
     let dir = common::temp_dir("listen-pulse-crash");

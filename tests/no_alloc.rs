@@ -278,3 +278,77 @@ fn deciding_between_patterns_alike_at_first_allocates_nothing_and_ignores_block_
         assert_eq!(run(block, false).0, events, "blocks of {block}");
     }
 }
+
+#[test]
+fn a_cut_off_the_output_thread_cannot_take_yet_waits_without_blocking_detection_or_reordering() {
+    use onomato::audio::ChannelSelect;
+    use onomato::daemon::{DetectorStage, FrameLayout, Status};
+    use onomato::output::OutputMessage;
+    use std::sync::Arc;
+
+    let (settings, patterns) = patterns_for(Method::Spectral);
+    let rate = RATE;
+    let mono = scene();
+    let det = Detector::new(patterns, &settings, rate).unwrap();
+    let (mut producer, consumer) = rtrb::RingBuffer::<f32>::new(rate as usize);
+    // A queue of two that nobody reads for a while: an output thread that is stuck.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<OutputMessage>(2);
+    let layout = FrameLayout {
+        channels: 1,
+        select: ChannelSelect::Mix,
+    };
+    let status = Arc::new(Status::default());
+    let mut stage = DetectorStage::new(det, consumer, layout, 256, tx, status.clone());
+    let third = mono.len() / 3;
+    let mut feed = |stage: &mut DetectorStage, part: &[f32]| {
+        for chunk in part.chunks(256) {
+            let (_, rest) = producer.push_partial_slice(chunk);
+            assert!(rest.is_empty());
+            while stage.poll(false) > 0 {}
+        }
+    };
+    let mut got = Vec::new();
+    for chunk in mono[..third].chunks(256 * 8) {
+        feed(&mut stage, chunk);
+        got.extend(rx.try_iter());
+    }
+    let before = got.len();
+    assert!(before > 0);
+    // The queue fills and stays full; the cut-off and what follows it must wait, and
+    // detection goes on without waiting and without allocating.
+    feed(&mut stage, &mono[third..third + rate as usize / 2]);
+    stage.send_control(OutputMessage::CutOff);
+    let n = allocations_in(|| feed(&mut stage, &mono[third + rate as usize / 2..2 * third]));
+    assert_eq!(n, 0, "{n} allocations while the cut-off waited");
+    // The output thread comes back: everything arrives in order, the cut-off after
+    // every event decided before it and before every event decided after it.
+    for chunk in mono[2 * third..].chunks(256 * 8) {
+        got.extend(rx.try_iter());
+        feed(&mut stage, chunk);
+    }
+    stage.finish();
+    got.extend(rx.try_iter());
+    let cut = got
+        .iter()
+        .position(|m| matches!(m, OutputMessage::CutOff))
+        .expect("the cut-off never arrived");
+    let ids: Vec<(usize, u64)> = got
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| match m {
+            OutputMessage::Event(e)
+                if e.end.is_none() || e.kind == onomato::PatternKind::Impulse =>
+            {
+                Some((i, e.id))
+            }
+            _ => None,
+        })
+        .collect();
+    assert!(ids.windows(2).all(|w| w[0].1 < w[1].1), "{ids:?}");
+    assert!(
+        ids.iter().any(|&(i, _)| i > cut),
+        "nothing after the cut-off"
+    );
+    let decided_while_full = status.dropped_events();
+    assert!(decided_while_full > 0, "the queue never filled");
+}

@@ -26,7 +26,10 @@ fn the_unit_is_sandboxed_to_an_exposure_of_at_most_2_5() {
     let (_, text) = systemd_analyze(&["security", "--offline=yes", unit.to_str().unwrap()]);
     let exposure: f64 = text
         .lines()
-        .find_map(|l| l.split("Overall exposure level for onomato.service:").nth(1))
+        .find_map(|l| {
+            l.split("Overall exposure level for onomato.service:")
+                .nth(1)
+        })
         .and_then(|rest| rest.split_whitespace().next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no exposure level in:\n{text}"));
@@ -42,12 +45,18 @@ fn the_unit_loads_with_its_commands_pointed_at_this_build() {
             "%h/.config/onomato/onomato.toml",
             root().join("config/onomato.toml").to_str().unwrap(),
         );
-    assert!(!local.contains("%h"), "a path the test does not replace:\n{local}");
+    assert!(
+        !local.contains("%h"),
+        "a path the test does not replace:\n{local}"
+    );
     let dir = common::temp_dir("unit");
     let path = dir.join("onomato.service");
     std::fs::write(&path, local).unwrap();
     let (ok, text) = systemd_analyze(&["verify", path.to_str().unwrap()]);
-    assert!(ok && text.trim().is_empty(), "systemd-analyze verify:\n{text}");
+    assert!(
+        ok && text.trim().is_empty(),
+        "systemd-analyze verify:\n{text}"
+    );
     // What the unit's start runs first passes on the example config.
     let check = Command::new(env!("CARGO_BIN_EXE_onomato"))
         .args(["check", "--config"])

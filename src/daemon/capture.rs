@@ -216,8 +216,11 @@ where
     f32: FromSample<T>,
 {
     let channels = usize::from(config.channels).max(1);
-    // The real-time callback: convert, copy whole frames into the ring, count the rest.
+    // The real-time callback: count what the device delivered (the watchdog's evidence
+    // that capture is alive, whatever the threads after it do), convert, copy whole
+    // frames into the ring, count the rest.
     let callback = move |data: &[T], _: &cpal::InputCallbackInfo| {
+        status.add_captured((data.len() / channels) as u64);
         let fits = (data.len().min(producer.slots()) / channels) * channels;
         if let Ok(chunk) = producer.write_chunk_uninit(fits) {
             chunk.fill_from_iter(data[..fits].iter().map(|s| s.to_sample::<f32>()));

@@ -10,8 +10,9 @@
 
 pub mod capture;
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
-use std::sync::mpsc::{self, Receiver, SyncSender};
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
 
@@ -28,6 +29,7 @@ use crate::pattern;
 #[derive(Debug, Default)]
 pub struct Status {
     stream_samples: AtomicU64,
+    captured_frames: AtomicU64,
     input_rate: AtomicU32,
     overrun_samples: AtomicU64,
     dropped_events: AtomicU64,
@@ -43,6 +45,13 @@ impl Status {
             return 0.0;
         }
         self.stream_samples.load(Ordering::Relaxed) as f64 / f64::from(rate)
+    }
+    /// Frames the audio device delivered to the capture callback (counted there).
+    pub fn captured_frames(&self) -> u64 {
+        self.captured_frames.load(Ordering::Relaxed)
+    }
+    pub(crate) fn add_captured(&self, frames: u64) {
+        self.captured_frames.fetch_add(frames, Ordering::Relaxed);
     }
     /// Samples the capture could not put in the ring.
     pub fn overrun_samples(&self) -> u64 {
@@ -87,8 +96,15 @@ pub struct DetectorStage {
     mono: Vec<f32>,
     events: Vec<Event>,
     sender: SyncSender<OutputMessage>,
+    /// Messages the output thread could not take yet, in order: a reconfiguration or
+    /// cut-off waits here instead of blocking detection, and the events after it wait
+    /// behind it (at most `BACKLOG` of them; more are dropped and counted).
+    backlog: VecDeque<OutputMessage>,
     status: Arc<Status>,
 }
+
+/// Events that may wait behind a control message the output thread has not taken.
+const BACKLOG: usize = 64;
 
 impl DetectorStage {
     pub fn new(
@@ -116,6 +132,7 @@ impl DetectorStage {
             mono: Vec::with_capacity(block_frames),
             events: Vec::with_capacity(256),
             sender,
+            backlog: VecDeque::with_capacity(BACKLOG + 2),
             status,
         }
     }
@@ -157,13 +174,68 @@ impl DetectorStage {
         frames
     }
 
-    /// Hands the pending events to the output thread; what does not fit is counted.
+    /// Hands the pending events to the output thread, after anything still waiting;
+    /// what does not fit is counted. Never waits.
     fn hand_over(&mut self) {
+        self.flush_backlog();
         for e in self.events.drain(..) {
+            if !self.backlog.is_empty() {
+                if self.backlog.len() < BACKLOG {
+                    self.backlog.push_back(OutputMessage::Event(e));
+                } else {
+                    self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
+                }
+                continue;
+            }
             // Full or gone, the event is lost: counted.
             if self.sender.try_send(OutputMessage::Event(e)).is_err() {
                 self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
             }
+        }
+    }
+
+    /// Queues a control message for the output thread, after the events before it.
+    /// Never waits; it is sent as soon as the output thread has room.
+    pub fn send_control(&mut self, message: OutputMessage) {
+        self.backlog.push_back(message);
+        self.flush_backlog();
+    }
+
+    /// Sends what waits, in order, while the output thread takes it.
+    fn flush_backlog(&mut self) {
+        while let Some(message) = self.backlog.pop_front() {
+            match self.sender.try_send(message) {
+                Ok(()) => {}
+                Err(TrySendError::Full(message)) => {
+                    self.backlog.push_front(message);
+                    return;
+                }
+                Err(TrySendError::Disconnected(_)) => {
+                    self.backlog.clear();
+                    return;
+                }
+            }
+        }
+    }
+
+    /// At the end: waits for the output thread to take what is still waiting, `wait`
+    /// at most (an output thread that is stuck cannot hold up the stop).
+    fn drain_backlog(&mut self, wait: Duration) {
+        let until = std::time::Instant::now() + wait;
+        self.flush_backlog();
+        while !self.backlog.is_empty() && std::time::Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(1));
+            self.flush_backlog();
+        }
+        let lost = self
+            .backlog
+            .drain(..)
+            .filter(|m| matches!(m, OutputMessage::Event(_)))
+            .count();
+        if lost > 0 {
+            self.status
+                .dropped_events
+                .fetch_add(lost as u64, Ordering::Relaxed);
         }
     }
 
@@ -264,7 +336,9 @@ struct Microphone {
     select: ChannelSelect,
     control: mpsc::Sender<Control>,
     status: Arc<Status>,
-    /// Stream position at the last check, and when it last moved.
+    /// Frames captured at the last check, and when that count last moved. The capture
+    /// callback counts them itself: a detector or output thread that falls behind does
+    /// not make a healthy input look dead.
     last_position: u64,
     last_progress: std::time::Instant,
     next_attempt: std::time::Instant,
@@ -294,7 +368,7 @@ impl Microphone {
     /// Drops a capture that failed or stalled; returns whether it did.
     fn check(&mut self, fault: Option<&capture::StreamFault>) -> bool {
         let now = std::time::Instant::now();
-        let position = self.status.stream_samples.load(Ordering::Relaxed);
+        let position = self.status.captured_frames();
         if position != self.last_position {
             self.last_position = position;
             self.last_progress = now;
@@ -475,7 +549,6 @@ pub fn listen(
         let stop = stop.clone();
         let input_done = input_done.clone();
         let control = control_tx.clone();
-        let out_tx = out_tx.clone();
         // Poll at a quarter of a block's duration, within 1-5 ms.
         let nap = Duration::from_secs_f64(
             (block_frames as f64 / f64::from(rate) / 4.0).clamp(0.001, 0.005),
@@ -483,7 +556,7 @@ pub fn listen(
         std::thread::Builder::new()
             .name("onomato-detector".into())
             .spawn(move || {
-                detector_loop(&mut stage, &stop, &input_done, &command_rx, &out_tx, nap);
+                detector_loop(&mut stage, &stop, &input_done, &command_rx, nap);
                 if input_done.load(Ordering::Acquire) && !stop.load(Ordering::Acquire) {
                     let _ = control.send(Control::InputEnded);
                 }
@@ -596,6 +669,7 @@ pub fn listen(
         osc_errors = report.output.osc.send_errors,
         note_ons = report.output.midi.note_ons,
         note_offs = report.output.midi.note_offs,
+        printed_lines_dropped = report.output.print_dropped,
         "stopped"
     );
     if let Some(why) = failure {
@@ -609,7 +683,6 @@ fn detector_loop(
     stop: &AtomicBool,
     input_done: &AtomicBool,
     commands: &Receiver<DetectorCommand>,
-    out_tx: &SyncSender<OutputMessage>,
     nap: Duration,
 ) {
     loop {
@@ -619,12 +692,12 @@ fn detector_loop(
         match commands.try_recv() {
             Ok(DetectorCommand::Reload(detector, settings)) => {
                 stage.replace_detector(*detector);
-                // Blocking: a reload must reach the output thread after the old events.
-                let _ = out_tx.send(OutputMessage::Reconfigure(settings));
+                // After the old detector's events, before the new one's.
+                stage.send_control(OutputMessage::Reconfigure(settings));
             }
             Ok(DetectorCommand::NewInput(consumer, layout, detector)) => {
                 stage.replace_input(consumer, layout, *detector);
-                let _ = out_tx.send(OutputMessage::CutOff);
+                stage.send_control(OutputMessage::CutOff);
             }
             Err(_) => {}
         }
@@ -635,10 +708,16 @@ fn detector_loop(
             stage.finish();
             break;
         }
+        // The output thread may have made room for what waits.
+        stage.flush_backlog();
         std::thread::sleep(nap);
     }
-    let _ = out_tx.send(OutputMessage::Stop);
+    stage.send_control(OutputMessage::Stop);
+    stage.drain_backlog(STOP_WAIT);
 }
+
+/// How long the stop waits for the output thread to take the last messages.
+const STOP_WAIT: Duration = Duration::from_secs(2);
 
 fn prepare_reload(
     load: &dyn Fn() -> anyhow::Result<Config>,

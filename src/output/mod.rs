@@ -1,15 +1,16 @@
 //! The output thread of the daemon: it owns the OSC socket ([`osc::OscSink`]), the MIDI
-//! port ([`midi::MidiSink`]) and the live bounce solver, and prints each event as it is
-//! sent. The detector thread hands it events through a bounded channel (`try_send`,
-//! drops counted); the main thread sends reconfigurations and the stop.
+//! port ([`midi::MidiSink`]) and the live bounce solver, and hands each event it sends
+//! to the printing thread ([`print::Printer`]), which never holds it up. The detector thread hands it events through a bounded channel (`try_send`,
+//! drops counted), and reconfigurations, cut-offs and the stop the same way, in order
+//! and without waiting (`DetectorStage::send_control`).
 //!
 //! Sends never run on the detection path. On stop and on reload every held sound is cut
 //! off (its `/end` sent, its note released) and every note is released.
 
 pub mod midi;
 pub mod osc;
+pub mod print;
 
-use std::io::Write;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant, SystemTime};
@@ -20,6 +21,7 @@ use crate::detect::Event;
 use crate::live_bounce::LiveBounce;
 use midi::{MidiSink, NoteMapping};
 use osc::OscSink;
+use print::Printer;
 
 /// Capacity of the channel from the detector thread.
 pub const OUTPUT_QUEUE: usize = 256;
@@ -69,6 +71,8 @@ pub struct OutputReport {
     pub osc: osc::OscCounters,
     pub midi: midi::MidiCounters,
     pub late_bounce_hits: u64,
+    /// Printed lines dropped because stdout was not read fast enough.
+    pub print_dropped: u64,
 }
 
 struct Sinks {
@@ -79,7 +83,6 @@ struct Sinks {
     heartbeat: Option<Duration>,
     /// Seconds between two drawn bounce states; `None`: no states are sent.
     state_period: Option<f64>,
-    print: PrintMode,
 }
 
 impl Sinks {
@@ -106,7 +109,6 @@ impl Sinks {
                 .and_then(|o| o.heartbeat_seconds)
                 .map(Duration::from_secs_f64),
             state_period: state_rate.map(|r| 1.0 / r),
-            print: s.print,
         }
     }
 
@@ -130,12 +132,12 @@ pub fn run(
     // Continuous events whose begin was sent and whose end was not.
     let mut open: Vec<Event> = Vec::with_capacity(16);
     let mut next_heartbeat = Instant::now();
-    let stdout = std::io::stdout();
     // In a terminal, a compact input level under the printed events.
     let meter = {
         use std::io::IsTerminal;
         settings.print == PrintMode::Text && std::io::stderr().is_terminal()
     };
+    let mut printer = Printer::start(settings.print, meter, print::PRINT_QUEUE, std::io::stdout());
     let mut next_meter = Instant::now();
     loop {
         let now = Instant::now();
@@ -176,16 +178,13 @@ pub fn run(
                     }
                     _ => false,
                 };
-                if meter {
-                    clear_meter();
-                }
-                print_event(&mut stdout.lock(), &e, begin_sent, sinks.print);
                 if let Some(o) = sinks.osc.as_mut() {
                     o.send_event(&e, begin_sent);
                 }
                 if let Some(m) = sinks.midi.as_mut() {
                     m.play(&e, Instant::now());
                 }
+                printer.event(&e, begin_sent);
                 if let Some(b) = sinks.bounce.as_mut() {
                     let late = b.late_hits();
                     let hit = b.on_event(&e);
@@ -213,9 +212,6 @@ pub fn run(
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
-                if meter {
-                    clear_meter();
-                }
                 // The states the delay held back, up to the end of the stream.
                 if sinks.states_wanted() {
                     let Sinks { bounce, osc, .. } = &mut sinks;
@@ -225,6 +221,7 @@ pub fn run(
                 }
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
                 collect(&sinks, &mut report);
+                report.print_dropped = printer.finish();
                 return report;
             }
             Err(RecvTimeoutError::Timeout) => {}
@@ -232,7 +229,7 @@ pub fn run(
         let now = Instant::now();
         if meter && now >= next_meter {
             next_meter = now + Duration::from_millis(100);
-            draw_meter(status.level_db(), status.stream_seconds(), report.events);
+            printer.meter(status.level_db(), status.stream_seconds(), report.events);
         }
         if let Some(m) = sinks.midi.as_mut() {
             m.release_due(now);
@@ -292,56 +289,4 @@ fn collect(sinks: &Sinks, report: &mut OutputReport) {
     if let Some(b) = &sinks.bounce {
         report.late_bounce_hits += b.late_hits();
     }
-}
-
-/// The input level line on stderr: `input ####------  -23 dB   12.3 s  4 events`.
-fn draw_meter(level_db: f32, stream_seconds: f64, events: u64) {
-    let filled = (((level_db + 60.0) / 60.0).clamp(0.0, 1.0) * 20.0) as usize;
-    let bar: String = "#".repeat(filled) + &"-".repeat(20 - filled);
-    let mut err = std::io::stderr().lock();
-    let _ = write!(
-        err,
-        "\r\x1b[K  input {bar} {level_db:6.1} dB  {stream_seconds:8.1} s  {events} events"
-    );
-    let _ = err.flush();
-}
-
-fn clear_meter() {
-    let mut err = std::io::stderr().lock();
-    let _ = write!(err, "\r\x1b[K");
-    let _ = err.flush();
-}
-
-/// Prints one event; a closed stdout (a pipe whose reader left) is ignored.
-fn print_event(out: &mut impl Write, e: &Event, begin_sent: bool, mode: PrintMode) {
-    let _ = match mode {
-        PrintMode::None => return,
-        PrintMode::Json => match serde_json::to_string(e) {
-            Ok(line) => writeln!(out, "{line}"),
-            Err(_) => return,
-        },
-        PrintMode::Text => {
-            let (at, phase, held) = match (e.kind, e.end) {
-                (PatternKind::Impulse, _) => (e.time, "impulse", String::new()),
-                (PatternKind::Continuous, None) => (e.time, "begin", String::new()),
-                (PatternKind::Continuous, Some(end)) if begin_sent => {
-                    (end, "end", format!("  held {:.3} s", end - e.time))
-                }
-                // Begin and end decided together (waveform method).
-                (PatternKind::Continuous, Some(end)) => {
-                    (e.time, "held", format!("  until {end:.3} s"))
-                }
-            };
-            let pitch = e
-                .pitch
-                .map(|p| format!("  pitch {p:.0} Hz"))
-                .unwrap_or_default();
-            writeln!(
-                out,
-                "{at:9.3} s  {:<10} {phase:<8} strength {:.2}  score {:.2}  #{:<4} decided at {:.3} s{held}{pitch}",
-                e.pattern, e.strength, e.score, e.id, e.emitted_at
-            )
-        }
-    };
-    let _ = out.flush();
 }

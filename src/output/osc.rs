@@ -8,11 +8,13 @@
 //! ([`exact_time`]). A 32-bit float keeps a millisecond only for the first 2^14 s of
 //! stream; the pair keeps 0.1 µs for 68 years, in types every receiver reads.
 //!
-//! Owned by the output thread. A target that cannot be resolved or does not answer is
-//! logged and retried; it never stops the daemon.
+//! Owned by the output thread; names are looked up on a thread of their own
+//! ([`spawn_resolver`]). A target that cannot be resolved or does not answer is logged
+//! and retried; it never stops the daemon.
 
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
-use std::time::{Duration, Instant, SystemTime};
+use std::sync::mpsc;
+use std::time::{Duration, SystemTime};
 
 use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
 
@@ -20,34 +22,83 @@ use crate::config::{OscSettings, PatternKind};
 use crate::detect::Event;
 use crate::live_bounce::{BounceState, LiveHit};
 
-/// How long a target whose name did not resolve waits before the next try.
+/// How long the sink's start waits for the first lookup of its names (a name in
+/// `/etc/hosts` takes well under a millisecond; a slow name server does not hold up a
+/// start or a reload longer than this, and its answer is used when it comes).
+const FIRST_LOOKUP_WAIT: Duration = Duration::from_millis(200);
+/// Sent by the lookup thread after its first pass over the names.
+const FIRST_PASS_DONE: usize = usize::MAX;
+/// How long a target whose name did not resolve waits before the next try...
 const RESOLVE_RETRY: Duration = Duration::from_secs(5);
+/// ...and how often a name that did is looked up again (a receiver whose address
+/// changes, as on a network that hands addresses out, is followed).
+const RESOLVE_REFRESH: Duration = Duration::from_secs(60);
 
 struct Target {
     spec: String,
     addr: Option<SocketAddr>,
-    next_resolve: Instant,
     failures: u64,
 }
 
-impl Target {
-    fn resolve(&mut self, now: Instant) {
-        if self.addr.is_some() || now < self.next_resolve {
-            return;
-        }
-        match self.spec.to_socket_addrs() {
-            Ok(mut addrs) => {
-                let all: Vec<SocketAddr> = addrs.by_ref().collect();
-                self.addr = all.iter().find(|a| a.is_ipv4()).or(all.first()).copied();
-                if self.addr.is_none() {
-                    tracing::warn!(target = %self.spec, "OSC target resolves to no address; retrying in 5 s");
+/// The address to send to among those a name resolves to: IPv4 first.
+fn pick(addrs: impl Iterator<Item = SocketAddr>) -> Option<SocketAddr> {
+    let all: Vec<SocketAddr> = addrs.collect();
+    all.iter().find(|a| a.is_ipv4()).or(all.first()).copied()
+}
+
+/// Looks the targets given by name up on a thread of its own, at once and then on a
+/// timer, so that a slow or absent name server never holds up a send. It ends when
+/// the sink that started it is dropped.
+fn spawn_resolver(
+    names: Vec<(usize, String)>,
+    found: mpsc::Sender<(usize, Option<SocketAddr>)>,
+) -> Option<mpsc::Sender<()>> {
+    let (stop_tx, stop_rx) = mpsc::channel::<()>();
+    let spawned = std::thread::Builder::new()
+        .name("onomato-resolve".into())
+        .spawn(move || {
+            let mut known: Vec<Option<SocketAddr>> = vec![None; names.len()];
+            let mut first_pass = true;
+            loop {
+                for (k, (index, spec)) in names.iter().enumerate() {
+                    let addr = match spec.to_socket_addrs() {
+                        Ok(addrs) => pick(addrs),
+                        Err(e) => {
+                            tracing::warn!(target = %spec, error = %e, "cannot resolve OSC target; retrying in 5 s");
+                            None
+                        }
+                    };
+                    if addr.is_none() && known[k].is_some() {
+                        // A lookup that fails now keeps the address that worked.
+                        continue;
+                    }
+                    if addr != known[k] {
+                        known[k] = addr;
+                        if found.send((*index, addr)).is_err() {
+                            return;
+                        }
+                    }
+                }
+                if std::mem::take(&mut first_pass) && found.send((FIRST_PASS_DONE, None)).is_err() {
+                    return;
+                }
+                let wait = if known.iter().all(Option::is_some) {
+                    RESOLVE_REFRESH
+                } else {
+                    RESOLVE_RETRY
+                };
+                match stop_rx.recv_timeout(wait) {
+                    Err(mpsc::RecvTimeoutError::Timeout) => {}
+                    _ => return,
                 }
             }
-            Err(e) => {
-                tracing::warn!(target = %self.spec, error = %e, "cannot resolve OSC target; retrying in 5 s");
-            }
+        });
+    match spawned {
+        Ok(_) => Some(stop_tx),
+        Err(e) => {
+            tracing::warn!("cannot start the OSC name lookup; targets by name get nothing: {e}");
+            None
         }
-        self.next_resolve = now + RESOLVE_RETRY;
     }
 }
 
@@ -63,6 +114,10 @@ pub struct OscSink {
     socket_v4: Option<UdpSocket>,
     socket_v6: Option<UdpSocket>,
     targets: Vec<Target>,
+    /// Addresses of targets given by name, as the lookup thread finds them.
+    resolved: mpsc::Receiver<(usize, Option<SocketAddr>)>,
+    /// Dropped with the sink: ends the lookup thread.
+    _stop_resolver: Option<mpsc::Sender<()>>,
     prefix: String,
     bundle: bool,
     /// Wall-clock time of stream time 0, for bundle timetags.
@@ -70,44 +125,92 @@ pub struct OscSink {
     counters: OscCounters,
 }
 
+/// Opens a UDP socket to send from; `None` (logged) when the system refuses.
+fn bind(addr: &str) -> Option<UdpSocket> {
+    match UdpSocket::bind(addr) {
+        Ok(s) => Some(s),
+        Err(e) => {
+            tracing::warn!(bind = addr, error = %e, "cannot open a UDP socket for OSC");
+            None
+        }
+    }
+}
+
 impl OscSink {
     pub fn new(settings: &OscSettings, stream_origin: SystemTime) -> Self {
-        let now = Instant::now();
-        let mut targets: Vec<Target> = settings
+        // Targets written as addresses are used at once; names are looked up apart.
+        let targets: Vec<Target> = settings
             .targets
             .iter()
             .map(|spec| Target {
                 spec: spec.clone(),
-                addr: None,
-                next_resolve: now,
+                addr: spec.parse::<SocketAddr>().ok(),
                 failures: 0,
             })
             .collect();
-        for t in &mut targets {
-            t.resolve(now);
-        }
-        let bind = |addr: &str| match UdpSocket::bind(addr) {
-            Ok(s) => Some(s),
-            Err(e) => {
-                tracing::warn!(bind = addr, error = %e, "cannot open a UDP socket for OSC");
-                None
-            }
-        };
-        let socket_v4 = bind("0.0.0.0:0");
-        let socket_v6 = if targets.iter().any(|t| t.addr.is_some_and(|a| a.is_ipv6())) {
-            bind("[::]:0")
-        } else {
+        let names: Vec<(usize, String)> = targets
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.addr.is_none())
+            .map(|(i, t)| (i, t.spec.clone()))
+            .collect();
+        let (found_tx, resolved) = mpsc::channel();
+        let stop_resolver = if names.is_empty() {
             None
+        } else {
+            spawn_resolver(names, found_tx)
         };
-        Self {
-            socket_v4,
-            socket_v6,
+        let mut sink = Self {
+            socket_v4: bind("0.0.0.0:0"),
+            socket_v6: None,
             targets,
+            resolved,
+            _stop_resolver: stop_resolver,
             prefix: settings.prefix.clone(),
             bundle: settings.bundle,
             stream_origin,
             counters: OscCounters::default(),
+        };
+        if sink
+            .targets
+            .iter()
+            .any(|t| t.addr.is_some_and(|a| a.is_ipv6()))
+        {
+            sink.socket_v6 = bind("[::]:0");
         }
+        if sink._stop_resolver.is_some() {
+            let until = std::time::Instant::now() + FIRST_LOOKUP_WAIT;
+            while let Ok((index, addr)) = sink
+                .resolved
+                .recv_timeout(until.saturating_duration_since(std::time::Instant::now()))
+            {
+                if index == FIRST_PASS_DONE {
+                    break;
+                }
+                sink.set_address(index, addr);
+            }
+        }
+        sink
+    }
+
+    /// Takes the addresses the lookup thread found since the last send.
+    fn take_resolved(&mut self) {
+        while let Ok((index, addr)) = self.resolved.try_recv() {
+            self.set_address(index, addr);
+        }
+    }
+
+    fn set_address(&mut self, index: usize, addr: Option<SocketAddr>) {
+        let Some(t) = self.targets.get_mut(index) else {
+            return;
+        };
+        if let Some(a) = addr {
+            tracing::info!(target = %t.spec, address = %a, "OSC target resolved");
+            if a.is_ipv6() && self.socket_v6.is_none() {
+                self.socket_v6 = bind("[::]:0");
+            }
+        }
+        t.addr = addr;
     }
 
     pub fn counters(&self) -> OscCounters {
@@ -294,9 +397,8 @@ impl OscSink {
                 return;
             }
         };
-        let now = Instant::now();
+        self.take_resolved();
         for t in &mut self.targets {
-            t.resolve(now);
             let Some(addr) = t.addr else { continue };
             let socket = if addr.is_ipv4() {
                 self.socket_v4.as_ref()
@@ -362,7 +464,14 @@ mod tests {
     #[test]
     fn exact_times_keep_a_microsecond_after_seven_days_where_f32_keeps_62_ms() {
         let week = 7.0 * 86_400.0;
-        for t in [0.0, 0.0005, 1.25, 16_384.001, week + 0.0123, week + 0.9999999999] {
+        for t in [
+            0.0,
+            0.0005,
+            1.25,
+            16_384.001,
+            week + 0.0123,
+            week + 0.9999999999,
+        ] {
             let back = seconds_of(&exact_time(t));
             assert!((back - t).abs() < 1e-6, "{t} came back as {back}");
         }
@@ -370,6 +479,34 @@ mod tests {
         assert!(((week + 0.0123) as f32 as f64 - (week + 0.0123)).abs() > 0.01);
         // A begin's "no end yet" stays −1 exactly.
         assert_eq!(seconds_of(&exact_time(-1.0)), -1.0);
+    }
+
+    #[test]
+    fn a_target_given_by_name_gets_the_first_event_and_an_unknown_name_does_not_stop_the_others() {
+        let receiver = UdpSocket::bind("127.0.0.1:0").unwrap();
+        receiver
+            .set_read_timeout(Some(Duration::from_secs(2)))
+            .unwrap();
+        let port = receiver.local_addr().unwrap().port();
+        let settings = OscSettings {
+            targets: vec![
+                "no-such-host.invalid:9000".into(),
+                format!("localhost:{port}"),
+            ],
+            prefix: "/x".into(),
+            bundle: false,
+            heartbeat_seconds: None,
+            bounce_state_rate: None,
+        };
+        let mut sink = OscSink::new(&settings, SystemTime::now());
+        sink.send_status(1.5, 0, 0, 0, -20.0);
+        let mut buf = [0u8; 512];
+        let n = receiver.recv(&mut buf).expect("nothing reached localhost");
+        match rosc::decoder::decode_udp(&buf[..n]).unwrap().1 {
+            OscPacket::Message(m) => assert_eq!(m.addr, "/x/status"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(sink.counters().packets_sent, 1);
     }
 
     #[test]
@@ -412,7 +549,10 @@ mod tests {
         assert_eq!(impulse.args.len(), 5);
         assert_eq!(impulse.args[2], OscType::Int(3));
         assert!((seconds_of(&impulse.args[3..5]) - time).abs() < 1e-3);
-        let generic = received.iter().find(|m| m.addr == "/onomato/event").unwrap();
+        let generic = received
+            .iter()
+            .find(|m| m.addr == "/onomato/event")
+            .unwrap();
         assert_eq!(generic.args.len(), 11);
         assert!((seconds_of(&generic.args[7..9]) - time).abs() < 1e-3);
         assert!((seconds_of(&generic.args[9..11]) - time).abs() < 1e-3);
