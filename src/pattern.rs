@@ -30,7 +30,7 @@ pub enum PatternError {
 }
 
 /// One enrolment take at the working rate.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Take {
     pub source: PathBuf,
     /// Mono samples at the working rate, DC removed, trimmed.
@@ -48,7 +48,7 @@ impl Take {
 }
 
 /// A pattern with its takes loaded.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Pattern {
     pub name: Arc<str>,
     pub kind: PatternKind,

@@ -955,10 +955,15 @@ fn sighup_reloads_a_good_config_and_keeps_the_old_one_when_the_new_one_is_broken
         Duration::from_secs(10),
     );
 
-    // Good: taken, with its new prefix.
-    write_config(&config, "/two", "0.5", &osc.target());
+    // Good: taken, with its new prefix and threshold; only what changed is rebuilt.
+    write_config(&config, "/two", "0.45", &osc.target());
     signal(&d.child, "HUP");
     wait_for_text(&d.stderr, "configuration reloaded", Duration::from_secs(5));
+    assert!(
+        read(&d.stderr).contains("changed=detector, osc"),
+        "{}",
+        read(&d.stderr)
+    );
     osc.wait_count(|m| m.addr.starts_with("/two/"), 2, Duration::from_secs(10));
     let messages = osc.messages();
     let first_two = messages
@@ -1268,6 +1273,120 @@ mod jack {
         }
         assert!(sounding.is_empty(), "notes left on: {sounding:?}");
         assert_eq!(offs.len(), ons.len());
+    }
+
+    #[test]
+    fn reloads_that_change_the_osc_prefix_or_a_note_keep_the_jack_connection_and_the_held_sound() {
+        let dir = common::temp_dir("listen-reload-difference");
+        let jack = Jack::start(&dir, "reload");
+        let osc = OscDump::start(&dir);
+        let (pattern, recording) = held_tone_files(&dir);
+        let config = dir.join("onomato.toml");
+        let write = |prefix: &str, note: u8| {
+            fs::write(
+                &config,
+                format!(
+                    "[detector]\nmethod = \"spectral\"\n\n[[pattern]]\nname = \"hum\"\nkind = \"continuous\"\nnote = {note}\ntakes = [\"{}\"]\n\n[osc]\ntargets = [\"{}\"]\nprefix = \"{prefix}\"\n\n[midi]\nvirtual_port = \"drums\"\n",
+                    pattern.display(),
+                    osc.target()
+                ),
+            )
+            .unwrap()
+        };
+        write("/one", 36);
+        let config_arg = config.to_string_lossy().into_owned();
+        let recording = recording.to_string_lossy().into_owned();
+        fn on_jack<'a>(c: &'a mut Command, server: &str) -> &'a mut Command {
+            c.env("JACK_DEFAULT_SERVER", server)
+                .env("JACK_NO_START_SERVER", "1")
+        }
+        let server = jack.name.clone();
+        let d = start_listen(
+            &dir,
+            &["-c", &config_arg, "--input", &recording, "--print", "json"],
+            |c| on_jack(c, &server),
+        );
+        wait_for_text(&d.stderr, "MIDI output open", Duration::from_secs(10));
+        let ports = String::from_utf8_lossy(
+            &on_jack(&mut Command::new("jack_lsp"), &server)
+                .output()
+                .unwrap()
+                .stdout,
+        )
+        .to_string();
+        let ours = ports
+            .lines()
+            .find(|p| p.ends_with(":drums"))
+            .unwrap_or_else(|| panic!("no port named drums: {ports}"))
+            .to_string();
+        let ok = on_jack(&mut Command::new("jack_connect"), &server)
+            .args([ours.as_str(), "midi-monitor:input"])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "jack_connect {ours} failed");
+        // The held sound begins at 0.5 s and lasts 5 s; the reload comes in its middle.
+        osc.wait_count(|m| m.addr == "/one/hum/begin", 1, Duration::from_secs(10));
+        std::thread::sleep(Duration::from_millis(500));
+        let still_connected = || {
+            let connections = String::from_utf8_lossy(
+                &on_jack(&mut Command::new("jack_lsp"), &server)
+                    .arg("-c")
+                    .output()
+                    .unwrap()
+                    .stdout,
+            )
+            .to_string();
+            let after_ours: Vec<&str> = connections
+                .lines()
+                .skip_while(|l| *l != ours)
+                .skip(1)
+                .take_while(|l| l.starts_with(' '))
+                .collect();
+            assert!(
+                after_ours.iter().any(|l| l.trim() == "midi-monitor:input"),
+                "the connection to the port did not survive the reload:\n{connections}"
+            );
+        };
+        write("/two", 36);
+        signal(&d.child, "HUP");
+        wait_for_text(&d.stderr, "changed=osc", Duration::from_secs(5));
+        still_connected();
+        // A new note for the pattern: the note that is on is released, the port stays.
+        std::thread::sleep(Duration::from_millis(500));
+        write("/two", 40);
+        signal(&d.child, "HUP");
+        wait_for_text(&d.stderr, "changed=midi", Duration::from_secs(5));
+        still_connected();
+        osc.wait_count(|m| m.addr == "/two/hum/end", 1, Duration::from_secs(10));
+        let log = stop_cleanly(d);
+        assert!(!log.contains("changed=detector"), "{log}");
+        let m = osc.messages();
+        assert!(
+            !m.iter().any(|m| m.addr == "/one/hum/end"),
+            "the reload ended the held sound"
+        );
+        let begin = m.iter().find(|m| m.addr == "/one/hum/begin").unwrap();
+        let end = m.iter().find(|m| m.addr == "/two/hum/end").unwrap();
+        assert_eq!(begin.args[2], end.args[2], "one sound, one id");
+        assert!(
+            (end.f(1) - 5.5).abs() < 0.1,
+            "ended at {end:?}, not where the tone ends"
+        );
+        // One note for the one sound, on at its begin and off once, at the reload that
+        // changed its note: none at the reload of the prefix.
+        let notes: Vec<(u8, u8, u8)> = jack.messages();
+        let ons: Vec<u8> = notes
+            .iter()
+            .filter(|n| n.0 == 0x99 && n.2 > 0)
+            .map(|n| n.1)
+            .collect();
+        let offs: Vec<u8> = notes
+            .iter()
+            .filter(|n| n.0 == 0x89 || (n.0 == 0x99 && n.2 == 0))
+            .map(|n| n.1)
+            .collect();
+        assert_eq!((ons, offs), (vec![36], vec![36]), "{notes:?}");
     }
 
     #[test]

@@ -23,7 +23,7 @@ use crate::audio::ChannelSelect;
 use crate::config::Config;
 use crate::detect::{Detector, Event};
 use crate::output::{self, midi, OutputMessage, OutputReport, OutputSettings, PrintMode};
-use crate::pattern;
+use crate::pattern::{self, Pattern};
 
 /// Counters and levels shared by the threads. Writers never block.
 #[derive(Debug, Default)]
@@ -300,14 +300,16 @@ enum Control {
 }
 
 enum DetectorCommand {
-    /// A reloaded configuration: a new detector, then new output settings.
-    Reload(Box<Detector>, Box<OutputSettings>),
+    /// A reloaded configuration: a new detector when its patterns or settings changed,
+    /// and the output settings (the output thread rebuilds what changed).
+    Reload(Option<Box<Detector>>, Box<OutputSettings>),
     /// The capture was opened again: a new ring (and layout) and a detector for its rate.
     NewInput(Consumer<f32>, FrameLayout, Box<Detector>),
 }
 
-/// The output thread's settings from a config.
-pub fn output_settings(config: &Config, detector: &Detector, print: PrintMode) -> OutputSettings {
+/// The output thread's settings from a config; `decision_delay`: the detector's
+/// [`Detector::decision_delay_bound`].
+pub fn output_settings(config: &Config, decision_delay: f64, print: PrintMode) -> OutputSettings {
     OutputSettings {
         osc: config.osc.clone(),
         midi: config
@@ -320,7 +322,7 @@ pub fn output_settings(config: &Config, detector: &Detector, print: PrintMode) -
                 .as_ref()
                 .is_some_and(|o| o.bounce_state_rate.is_some()))
         .then(|| config.bounce_or_default()),
-        decision_delay: detector.decision_delay_bound(),
+        decision_delay,
         print,
     }
 }
@@ -524,11 +526,13 @@ pub fn listen(
         }
     };
 
+    let mut running_patterns = patterns.clone();
     let detector = Detector::new(patterns, &config.detector, rate)?;
+    let mut running_delay = detector.decision_delay_bound();
     let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
     let origin = SystemTime::now();
     let output_thread = {
-        let settings = output_settings(&config, &detector, options.print);
+        let settings = output_settings(&config, running_delay, options.print);
         let status = status.clone();
         std::thread::Builder::new()
             .name("onomato-output".into())
@@ -577,13 +581,31 @@ pub fn listen(
         match message {
             Some(Control::Signal(SIGHUP)) => {
                 tracing::info!("SIGHUP: reloading the configuration");
-                match prepare_reload(load, rate, options.print) {
-                    Ok((new, detector, settings)) => {
+                match prepare_reload(
+                    load,
+                    &config,
+                    &running_patterns,
+                    running_delay,
+                    rate,
+                    options.print,
+                ) {
+                    Ok(reload) => {
+                        let new = reload.config;
                         if new.input != config.input && options.input_file.is_none() {
                             tracing::warn!("[input] changed: restart the daemon to use the new input settings; keeping the running capture");
                         }
-                        let _ = command_tx.send(DetectorCommand::Reload(detector, settings));
-                        tracing::info!(patterns = new.patterns.len(), "configuration reloaded");
+                        let detector = reload.detector.map(|(detector, patterns)| {
+                            running_patterns = patterns;
+                            running_delay = detector.decision_delay_bound();
+                            detector
+                        });
+                        let _ = command_tx.send(DetectorCommand::Reload(detector, reload.settings));
+                        let changed = if reload.changed.is_empty() {
+                            "nothing".to_string()
+                        } else {
+                            reload.changed.join(", ")
+                        };
+                        tracing::info!(patterns = new.patterns.len(), %changed, "configuration reloaded");
                         config = Config {
                             input: config.input.clone(),
                             ..new
@@ -691,8 +713,12 @@ fn detector_loop(
         }
         match commands.try_recv() {
             Ok(DetectorCommand::Reload(detector, settings)) => {
-                stage.replace_detector(*detector);
-                // After the old detector's events, before the new one's.
+                if let Some(detector) = detector {
+                    stage.replace_detector(*detector);
+                    // The new detector does not know the old one's held sounds: they
+                    // end here, after the old detector's events, before the new one's.
+                    stage.send_control(OutputMessage::CutOff);
+                }
                 stage.send_control(OutputMessage::Reconfigure(settings));
             }
             Ok(DetectorCommand::NewInput(consumer, layout, detector)) => {
@@ -719,14 +745,53 @@ fn detector_loop(
 /// How long the stop waits for the output thread to take the last messages.
 const STOP_WAIT: Duration = Duration::from_secs(2);
 
+/// A validated configuration to reload: what changed, and what to run it with.
+struct Reload {
+    config: Config,
+    /// A new detector and its patterns, when the patterns (their takes' sound
+    /// included) or the detector's settings changed.
+    detector: Option<(Box<Detector>, Vec<Pattern>)>,
+    settings: Box<OutputSettings>,
+    changed: Vec<&'static str>,
+}
+
+/// Loads and validates the configuration again and compares it with the running one:
+/// only the parts that differ are rebuilt.
 fn prepare_reload(
     load: &dyn Fn() -> anyhow::Result<Config>,
+    running: &Config,
+    running_patterns: &[Pattern],
+    running_delay: f64,
     rate: u32,
     print: PrintMode,
-) -> anyhow::Result<(Config, Box<Detector>, Box<OutputSettings>)> {
+) -> anyhow::Result<Reload> {
     let config = load()?;
     let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
-    let detector = Detector::new(patterns, &config.detector, rate)?;
-    let settings = output_settings(&config, &detector, print);
-    Ok((config, Box::new(detector), Box::new(settings)))
+    let mut changed = Vec::new();
+    let detector = if patterns != running_patterns || config.detector != running.detector {
+        changed.push("detector");
+        Some(Detector::new(patterns.clone(), &config.detector, rate)?)
+    } else {
+        None
+    };
+    let delay = detector
+        .as_ref()
+        .map_or(running_delay, Detector::decision_delay_bound);
+    let settings = output_settings(&config, delay, print);
+    let running_settings = output_settings(running, running_delay, print);
+    if settings.osc != running_settings.osc {
+        changed.push("osc");
+    }
+    if settings.midi != running_settings.midi {
+        changed.push("midi");
+    }
+    if settings.bounce != running_settings.bounce {
+        changed.push("bounce");
+    }
+    Ok(Reload {
+        config,
+        detector: detector.map(|d| (Box::new(d), patterns)),
+        settings: Box::new(settings),
+        changed,
+    })
 }

@@ -74,6 +74,8 @@ pub struct MidiSink {
     connection: Option<MidiOutputConnection>,
     next_connect: Instant,
     sounding: Vec<SoundingNote>,
+    /// Held sounds whose note a reload released: their end plays nothing.
+    released_held: Vec<u64>,
     counters: MidiCounters,
     last_sent: Option<Instant>,
     open_failures: u64,
@@ -87,6 +89,7 @@ impl MidiSink {
             connection: None,
             next_connect: Instant::now(),
             sounding: Vec::with_capacity(64),
+            released_held: Vec::new(),
             counters: MidiCounters::default(),
             last_sent: None,
             open_failures: 0,
@@ -171,7 +174,9 @@ impl MidiSink {
             }
             (PatternKind::Continuous, Some(_)) => {
                 let id = e.id;
-                if self.sounding.iter().any(|s| s.event == id) {
+                if let Some(i) = self.released_held.iter().position(|&r| r == id) {
+                    self.released_held.swap_remove(i);
+                } else if self.sounding.iter().any(|s| s.event == id) {
                     self.release_matching(|s| s.event == id);
                 } else {
                     // Begin and end decided together (waveform method): play it gated.
@@ -229,6 +234,21 @@ impl MidiSink {
     /// When the next gate closes.
     pub fn next_deadline(&self) -> Option<Instant> {
         self.sounding.iter().filter_map(|s| s.off_at).min()
+    }
+
+    /// New settings and note mappings on the same port (reload): the notes that are on
+    /// are released first, the connection stays.
+    pub fn update(&mut self, settings: MidiSettings, mappings: Vec<NoteMapping>) {
+        self.released_held = self
+            .sounding
+            .iter()
+            .filter(|s| s.off_at.is_none())
+            .map(|s| s.event)
+            .collect();
+        self.release_all();
+        debug_assert!(settings.port == self.settings.port);
+        self.settings = settings;
+        self.mappings = mappings;
     }
 
     /// Releases every note that is on (stop, reload, cut-off).

@@ -4,8 +4,9 @@
 //! drops counted), and reconfigurations, cut-offs and the stop the same way, in order
 //! and without waiting (`DetectorStage::send_control`).
 //!
-//! Sends never run on the detection path. On stop and on reload every held sound is cut
-//! off (its `/end` sent, its note released) and every note is released.
+//! Sends never run on the detection path. On stop every held sound is cut off (its
+//! `/end` sent, its note released) and every note is released; a reload rebuilds only
+//! what changed ([`Sinks::reconfigure`]).
 
 pub mod midi;
 pub mod osc;
@@ -39,7 +40,7 @@ pub enum PrintMode {
 }
 
 /// What the output thread sends where.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct OutputSettings {
     pub osc: Option<OscSettings>,
     pub midi: Option<(MidiSettings, Vec<NoteMapping>)>,
@@ -55,7 +56,7 @@ pub struct OutputSettings {
 #[derive(Debug)]
 pub enum OutputMessage {
     Event(Event),
-    /// New settings (reload): held sounds are cut off and notes released first.
+    /// New settings (reload): only the sinks whose settings changed are made again.
     Reconfigure(Box<OutputSettings>),
     /// Cut off held sounds and release every note (the input changed).
     CutOff,
@@ -76,6 +77,9 @@ pub struct OutputReport {
 }
 
 struct Sinks {
+    /// The settings the sinks were made from, to reload by difference.
+    settings: OutputSettings,
+    origin: SystemTime,
     osc: Option<OscSink>,
     midi: Option<MidiSink>,
     bounce: Option<LiveBounce>,
@@ -85,31 +89,98 @@ struct Sinks {
     state_period: Option<f64>,
 }
 
+fn state_rate(s: &OutputSettings) -> Option<f64> {
+    s.osc.as_ref().and_then(|o| o.bounce_state_rate)
+}
+
+fn new_bounce(s: &OutputSettings) -> Option<LiveBounce> {
+    s.bounce
+        .as_ref()
+        .map(|b| LiveBounce::new(b, state_rate(s).unwrap_or(60.0)))
+}
+
 impl Sinks {
     fn new(s: &OutputSettings, origin: SystemTime) -> Self {
-        let state_rate = s.osc.as_ref().and_then(|o| o.bounce_state_rate);
-        Self {
+        let mut sinks = Self {
+            settings: s.clone(),
+            origin,
             osc: s.osc.as_ref().map(|o| OscSink::new(o, origin)),
             midi: s
                 .midi
                 .as_ref()
                 .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone())),
-            bounce: s
-                .bounce
-                .as_ref()
-                .map(|b| LiveBounce::new(b, state_rate.unwrap_or(60.0))),
-            state_delay: s
-                .bounce
-                .as_ref()
-                .and_then(|b| b.state_delay_seconds)
-                .unwrap_or(s.decision_delay),
-            heartbeat: s
-                .osc
-                .as_ref()
-                .and_then(|o| o.heartbeat_seconds)
-                .map(Duration::from_secs_f64),
-            state_period: state_rate.map(|r| 1.0 / r),
+            bounce: new_bounce(s),
+            state_delay: 0.0,
+            heartbeat: None,
+            state_period: None,
+        };
+        sinks.derive_timing();
+        sinks
+    }
+
+    fn derive_timing(&mut self) {
+        let s = &self.settings;
+        self.state_delay = s
+            .bounce
+            .as_ref()
+            .and_then(|b| b.state_delay_seconds)
+            .unwrap_or(s.decision_delay);
+        self.heartbeat = s
+            .osc
+            .as_ref()
+            .and_then(|o| o.heartbeat_seconds)
+            .map(Duration::from_secs_f64);
+        self.state_period = state_rate(s).map(|r| 1.0 / r);
+    }
+
+    /// Reload by difference: rebuilds only the sinks whose settings changed, so that a
+    /// new OSC target keeps the MIDI port (and the connections a DAW made to it) and
+    /// the held sounds, and new note mappings keep the port open. Returns what changed.
+    /// The counters of a sink that is replaced go into `report`.
+    fn reconfigure(
+        &mut self,
+        new: &OutputSettings,
+        report: &mut OutputReport,
+    ) -> Vec<&'static str> {
+        let mut changed = Vec::new();
+        let old = std::mem::replace(&mut self.settings, new.clone());
+        if new.osc != old.osc {
+            if let Some(o) = &self.osc {
+                add_osc(report, o.counters());
+            }
+            self.osc = new.osc.as_ref().map(|o| OscSink::new(o, self.origin));
+            changed.push("osc");
         }
+        match (&new.midi, self.midi.as_mut(), &old.midi) {
+            (Some((m, notes)), Some(sink), Some((old_m, old_notes))) if m.port == old_m.port => {
+                if m != old_m || notes != old_notes {
+                    // The notes that are on were started under the old mapping.
+                    sink.update(m.clone(), notes.clone());
+                    changed.push("midi notes");
+                }
+            }
+            _ if new.midi != old.midi => {
+                if let Some(m) = &self.midi {
+                    add_midi(report, m.counters());
+                }
+                // Dropping the old sink releases its notes.
+                self.midi = new
+                    .midi
+                    .as_ref()
+                    .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone()));
+                changed.push("midi port");
+            }
+            _ => {}
+        }
+        if new.bounce != old.bounce || state_rate(new) != state_rate(&old) {
+            if let Some(b) = &self.bounce {
+                report.late_bounce_hits += b.late_hits();
+            }
+            self.bounce = new_bounce(new);
+            changed.push("bounce");
+        }
+        self.derive_timing();
+        changed
     }
 
     /// States are drawn when OSC asks for them (`bounce_state_rate`, which only an
@@ -203,10 +274,10 @@ pub fn run(
                 }
             }
             Ok(OutputMessage::Reconfigure(new)) => {
-                cut_off(&mut sinks, &mut open, status.stream_seconds());
-                collect(&sinks, &mut report);
-                sinks = Sinks::new(&new, origin);
-                tracing::info!("output settings reloaded");
+                let changed = sinks.reconfigure(&new, &mut report);
+                if !changed.is_empty() {
+                    tracing::info!(changed = %changed.join(", "), "outputs reloaded");
+                }
             }
             Ok(OutputMessage::CutOff) => {
                 cut_off(&mut sinks, &mut open, status.stream_seconds());
@@ -274,17 +345,23 @@ fn cut_off(sinks: &mut Sinks, open: &mut Vec<Event>, at: f64) {
     }
 }
 
+fn add_osc(report: &mut OutputReport, c: osc::OscCounters) {
+    report.osc.packets_sent += c.packets_sent;
+    report.osc.send_errors += c.send_errors;
+}
+
+fn add_midi(report: &mut OutputReport, c: midi::MidiCounters) {
+    report.midi.note_ons += c.note_ons;
+    report.midi.note_offs += c.note_offs;
+    report.midi.send_errors += c.send_errors;
+}
+
 fn collect(sinks: &Sinks, report: &mut OutputReport) {
     if let Some(o) = &sinks.osc {
-        let c = o.counters();
-        report.osc.packets_sent += c.packets_sent;
-        report.osc.send_errors += c.send_errors;
+        add_osc(report, o.counters());
     }
     if let Some(m) = &sinks.midi {
-        let c = m.counters();
-        report.midi.note_ons += c.note_ons;
-        report.midi.note_offs += c.note_offs;
-        report.midi.send_errors += c.send_errors;
+        add_midi(report, m.counters());
     }
     if let Some(b) = &sinks.bounce {
         report.late_bounce_hits += b.late_hits();
