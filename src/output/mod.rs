@@ -152,13 +152,14 @@ impl Sinks {
             changed.push("osc");
         }
         match (&new.midi, self.midi.as_mut(), &old.midi) {
-            (Some((m, notes)), Some(sink), Some((old_m, old_notes))) if m.port == old_m.port => {
-                if m != old_m || notes != old_notes {
-                    // The notes that are on were started under the old mapping.
-                    sink.update(m.clone(), notes.clone());
-                    changed.push("midi notes");
-                }
+            (Some((m, notes)), Some(sink), Some((old_m, old_notes)))
+                if m.port == old_m.port && (m != old_m || notes != old_notes) =>
+            {
+                // The notes that are on were started under the old mapping.
+                sink.update(m.clone(), notes.clone());
+                changed.push("midi notes");
             }
+            (Some((m, _)), Some(_), Some((old_m, _))) if m.port == old_m.port => {}
             _ if new.midi != old.midi => {
                 if let Some(m) = &self.midi {
                     add_midi(report, m.counters());
