@@ -214,7 +214,8 @@ impl WavSource {
 
     /// Reads the rest of the file as mono.
     pub fn read_all(&mut self) -> Result<Vec<f32>, AudioError> {
-        let mut all = Vec::with_capacity(self.frames_total as usize);
+        // The header's length is a claim, not a fact: a damaged one may announce 4 GB.
+        let mut all = Vec::with_capacity(self.frames_total.min(1 << 22) as usize);
         let mut block = Vec::new();
         while self.read_block(1 << 16, &mut block)? > 0 {
             all.extend_from_slice(&block);

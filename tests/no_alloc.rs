@@ -73,19 +73,6 @@ fn scene() -> Vec<f32> {
 }
 
 /// Three impulse patterns and a held hum, for `method`.
-fn patterns_for(method: Method) -> (DetectorSettings, Vec<onomato::Pattern>) {
-    let settings = DetectorSettings {
-        method,
-        ..DetectorSettings::default()
-    };
-    let mut patterns: Vec<_> = three_impulses()
-        .into_iter()
-        .map(|(n, s)| impulse(n, s, &settings))
-        .collect();
-    patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
-    (settings, patterns)
-}
-
 fn check(method: Method, input_rate: u32, block: usize) {
     let (settings, patterns) = patterns_for(method);
     let rec = onomato::audio::resample_clip(&scene(), RATE, input_rate).unwrap();

@@ -183,3 +183,17 @@ pub fn three_impulses() -> Vec<(&'static str, Vec<f32>)> {
         ("pew", sweep(RATE, 0.150, 2200.0, 600.0, 0.080)),
     ]
 }
+
+/// Three synthetic impulses and a held buzz, enrolled for `method`.
+pub fn patterns_for(method: Method) -> (DetectorSettings, Vec<Pattern>) {
+    let settings = DetectorSettings {
+        method,
+        ..DetectorSettings::default()
+    };
+    let mut patterns: Vec<_> = three_impulses()
+        .into_iter()
+        .map(|(n, s)| impulse(n, s, &settings))
+        .collect();
+    patterns.push(continuous("hum", buzz(RATE, 0.2, 140.0), &settings));
+    (settings, patterns)
+}
