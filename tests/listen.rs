@@ -168,8 +168,12 @@ struct OscDump {
 
 impl OscDump {
     fn start(dir: &Path) -> Self {
-        let port = free_udp_port();
-        let out = dir.join(format!("oscdump-{port}.txt"));
+        Self::start_on(dir, free_udp_port(), "")
+    }
+
+    /// A receiver on `port`, writing to its own file (`tag` tells two apart).
+    fn start_on(dir: &Path, port: u16, tag: &str) -> Self {
+        let out = dir.join(format!("oscdump-{port}{tag}.txt"));
         let child = spawn(
             Command::new("stdbuf")
                 .args(["-oL", "oscdump", "-L", &port.to_string()])
@@ -884,6 +888,51 @@ fn an_unreachable_osc_target_does_not_stop_the_daemon() {
     );
     osc.wait_count(|m| m.addr == "/onomato/event", 15, Duration::from_secs(5));
     check_example_osc(&osc.messages(), Some(0.0));
+}
+
+#[test]
+fn an_osc_receiver_that_goes_away_and_comes_back_gets_the_later_events() {
+    let dir = common::temp_dir("listen-receiver-back");
+    let first = OscDump::start(&dir);
+    let port = first.port;
+    let mut d = start_listen(
+        &dir,
+        &[
+            "-c",
+            "config/onomato.toml",
+            "--input",
+            "examples/beat.wav",
+            "--repeat",
+            "4",
+            "--speed",
+            "4",
+            "--osc",
+            &first.target(),
+        ],
+        |c| c,
+    );
+    first.wait_count(|m| m.addr == "/onomato/event", 3, Duration::from_secs(10));
+    // The receiver quits (its port is closed: sends fail with "connection refused")...
+    drop(first);
+    std::thread::sleep(Duration::from_millis(1500));
+    // ...and a new one starts on the same port.
+    let second = OscDump::start_on(&dir, port, "-again");
+    let status = wait_exit(&mut d.child, Duration::from_secs(30));
+    assert!(status.success(), "{}", read(&d.stderr));
+    let times: Vec<f64> = second
+        .messages()
+        .iter()
+        .filter(|m| m.addr == "/onomato/event")
+        .map(|m| m.f(3))
+        .collect();
+    // The replay lasts 40 s of stream (10 s at 4x); the receiver was back after at most
+    // 2.5 s of wall time: the last 25 s of stream, about 35 sounds, reached it.
+    assert!(
+        times.len() >= 30,
+        "{} events after the receiver came back: {times:?}",
+        times.len()
+    );
+    assert!(times.last().is_some_and(|&t| t > 38.0), "{times:?}");
 }
 
 /// A `[[pattern]]` of the example's patterns, with its take's absolute path and any
