@@ -106,6 +106,13 @@ pub fn analyze_file_with(
         return Err(AnalyzeError::EmptyRecording(recording.to_path_buf()));
     }
     detector.finish(&mut events);
+    if detector.bad_samples() > 0 {
+        tracing::warn!(
+            recording = %recording.display(),
+            samples = detector.bad_samples(),
+            "samples that were not numbers (taken as 0) or beyond full scale (clamped) were replaced"
+        );
+    }
     tracing::info!(
         recording = %recording.display(),
         seconds = frames as f64 / f64::from(source.sample_rate()),

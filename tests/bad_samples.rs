@@ -68,3 +68,46 @@ fn a_10_ms_burst_of_nan_or_out_of_range_samples_costs_no_sound_0_3_s_after_it() 
         }
     }
 }
+
+/// The same burst in a float WAV file, through `analyze` and `listen`: the sounds are
+/// found and the replaced samples are counted and named in the log.
+#[test]
+fn analyze_and_listen_report_the_samples_they_replaced() {
+    let (_, mut signal, rate) = example();
+    let burst = (0.010 * f64::from(rate)) as usize;
+    let at = (2.0 * f64::from(rate)) as usize;
+    for x in &mut signal[at..at + burst] {
+        *x = f32::NAN;
+    }
+    let dir = common::temp_dir("bad-samples-cli");
+    let wav = dir.join("nan-burst.wav");
+    common::write_wav_f32(&wav, &signal, rate);
+    let bin = env!("CARGO_BIN_EXE_onomato");
+    let analyzed = std::process::Command::new(bin)
+        .args(["analyze"])
+        .arg(&wav)
+        .args(["-c", "config/onomato.toml", "--format", "json"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(analyzed.status.success());
+    let log = String::from_utf8_lossy(&analyzed.stderr);
+    assert!(
+        log.contains("were replaced") && log.contains(&format!("samples={burst}")),
+        "{log}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&analyzed.stdout).unwrap();
+    assert!(json["events"].as_array().unwrap().len() >= 13, "{json}");
+    let listened = std::process::Command::new(bin)
+        .args(["listen", "-c", "config/onomato.toml", "--input"])
+        .arg(&wav)
+        .args(["--speed", "20", "--print", "none", "--osc", "127.0.0.1:9"])
+        .env("RUST_LOG", "info")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(listened.status.success());
+    let log = String::from_utf8_lossy(&listened.stderr);
+    assert!(log.contains("were replaced"), "{log}");
+    assert!(log.contains(&format!("bad_samples={burst}")), "{log}");
+}

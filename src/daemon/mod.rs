@@ -30,6 +30,7 @@ use crate::pattern::{self, Pattern};
 pub struct Status {
     stream_samples: AtomicU64,
     captured_frames: AtomicU64,
+    bad_samples: AtomicU64,
     input_rate: AtomicU32,
     overrun_samples: AtomicU64,
     dropped_events: AtomicU64,
@@ -52,6 +53,11 @@ impl Status {
     }
     pub(crate) fn add_captured(&self, frames: u64) {
         self.captured_frames.fetch_add(frames, Ordering::Relaxed);
+    }
+    /// Input samples the detector replaced: not numbers (taken as 0) or beyond full
+    /// scale (clamped).
+    pub fn bad_samples(&self) -> u64 {
+        self.bad_samples.load(Ordering::Relaxed)
     }
     /// Samples the capture could not put in the ring.
     pub fn overrun_samples(&self) -> u64 {
@@ -100,6 +106,8 @@ pub struct DetectorStage {
     /// cut-off waits here instead of blocking detection, and the events after it wait
     /// behind it (at most `BACKLOG` of them; more are dropped and counted).
     backlog: VecDeque<OutputMessage>,
+    /// Bad samples counted by detectors that were replaced (reload, new input).
+    bad_samples_before: u64,
     status: Arc<Status>,
 }
 
@@ -133,6 +141,7 @@ impl DetectorStage {
             events: Vec::with_capacity(256),
             sender,
             backlog: VecDeque::with_capacity(BACKLOG + 2),
+            bad_samples_before: 0,
             status,
         }
     }
@@ -166,6 +175,10 @@ impl DetectorStage {
             .level_db_bits
             .store(db.to_bits(), Ordering::Relaxed);
         self.detector.process(&self.mono, &mut self.events);
+        self.status.bad_samples.store(
+            self.bad_samples_before + self.detector.bad_samples(),
+            Ordering::Relaxed,
+        );
         self.status.stream_samples.store(
             (self.detector.stream_seconds() * f64::from(self.detector.input_rate())).round() as u64,
             Ordering::Relaxed,
@@ -250,6 +263,7 @@ impl DetectorStage {
     pub fn replace_detector(&mut self, mut detector: Detector) {
         detector.report_begins(true);
         detector.continue_after(&self.detector);
+        self.bad_samples_before += self.detector.bad_samples();
         self.status
             .input_rate
             .store(detector.input_rate(), Ordering::Relaxed);
@@ -326,6 +340,17 @@ pub fn output_settings(config: &Config, decision_delay: f64, print: PrintMode) -
         print,
     }
 }
+
+fn log_bad_samples(new: u64, total: u64) {
+    tracing::warn!(
+        new,
+        total,
+        "input samples that were not numbers (taken as 0) or beyond full scale (clamped) were replaced"
+    );
+}
+
+/// Replaced input samples are logged at most this often.
+const BAD_SAMPLES_LOG_EVERY: Duration = Duration::from_secs(60);
 
 /// How long the capture may deliver nothing before it is opened again.
 const STALL_SECONDS: f64 = 3.0;
@@ -572,6 +597,8 @@ pub fn listen(
 
     tracing::info!(patterns = config.patterns.len(), rate, "listening");
     let mut failure: Option<&str> = None;
+    let mut bad_logged = 0u64;
+    let mut last_bad_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
     loop {
         let message = match control_rx.recv_timeout(Duration::from_secs(1)) {
             Ok(m) => Some(m),
@@ -639,6 +666,12 @@ pub fn listen(
             failure = Some("the detector or output thread stopped unexpectedly");
             break;
         }
+        let bad = status.bad_samples();
+        if bad > bad_logged && last_bad_log.elapsed() >= BAD_SAMPLES_LOG_EVERY {
+            log_bad_samples(bad - bad_logged, bad);
+            bad_logged = bad;
+            last_bad_log = std::time::Instant::now();
+        }
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
             if let Some((new_rate, layout, consumer)) = mic.reopen(&config) {
@@ -661,6 +694,9 @@ pub fn listen(
     }
     stop.store(true, Ordering::Release);
     let _ = detector_thread.join();
+    if status.bad_samples() > bad_logged {
+        log_bad_samples(status.bad_samples() - bad_logged, status.bad_samples());
+    }
     drop(command_tx);
     // The detector thread sent Stop after its last event.
     let output = output_thread.join().unwrap_or_default();
@@ -692,6 +728,7 @@ pub fn listen(
         note_ons = report.output.midi.note_ons,
         note_offs = report.output.midi.note_offs,
         printed_lines_dropped = report.output.print_dropped,
+        bad_samples = status.bad_samples(),
         "stopped"
     );
     if let Some(why) = failure {
