@@ -604,6 +604,25 @@ fn replayed_example_reaches_an_independent_osc_receiver() {
     }
 }
 
+/// The example's impulses as sent (`/onomato/<pattern>`), in order.
+fn impulse_messages(messages: &[OscLine]) -> Vec<&OscLine> {
+    messages
+        .iter()
+        .filter(|m| m.addr.matches('/').count() == 2 && !m.addr.ends_with("/event"))
+        .collect()
+}
+
+/// Each impulse message with its delay: its arrival less the moment its sound was
+/// played (the file's start at `played_at`, Unix seconds, plus the sound's onset).
+fn arrival_delays(messages: &[OscLine], played_at: f64) -> Vec<(&OscLine, f64)> {
+    let truth = example_truth();
+    impulse_messages(messages)
+        .into_iter()
+        .zip(truth.iter().filter(|t| t.1 != "hoo"))
+        .map(|(m, t)| (m, m.arrival - (played_at + t.0)))
+        .collect()
+}
+
 #[test]
 fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
     let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
@@ -634,10 +653,7 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
     // before paplay. Their spacing is the file's.
     check_example_osc(&messages, None);
     let truth = example_truth();
-    let impulses: Vec<&OscLine> = messages
-        .iter()
-        .filter(|m| m.addr.matches('/').count() == 2 && !m.addr.ends_with("/event"))
-        .collect();
+    let impulses = impulse_messages(&messages);
     let first = impulses[0].f(1);
     for (m, t) in impulses.iter().zip(truth.iter().filter(|t| t.1 != "hoo")) {
         assert!(
@@ -647,10 +663,9 @@ fn microphone_capture_through_pulseaudio_sends_one_osc_message_per_sound() {
         );
     }
     // End-to-end delay: from the sound's onset in the played file to the arrival.
-    let mut delays: Vec<f64> = impulses
-        .iter()
-        .zip(truth.iter().filter(|t| t.1 != "hoo"))
-        .map(|(m, t)| m.arrival - (played_at + t.0))
+    let mut delays: Vec<f64> = arrival_delays(&messages, played_at)
+        .into_iter()
+        .map(|(_, d)| d)
         .collect();
     delays.sort_by(f64::total_cmp);
     eprintln!(
@@ -717,15 +732,9 @@ fn a_reader_of_printed_events_that_stops_for_10_s_costs_printed_lines_only() {
     pulse.play("examples/beat.wav");
     osc.wait_count(|m| m.addr == "/onomato/event", 15, Duration::from_secs(5));
     // Every sound reached OSC as soon as it would with a reader, while nobody read.
-    let truth = example_truth();
     let messages = osc.messages();
     check_example_osc(&messages, None);
-    let impulses: Vec<&OscLine> = messages
-        .iter()
-        .filter(|m| m.addr.matches('/').count() == 2 && !m.addr.ends_with("/event"))
-        .collect();
-    for (m, t) in impulses.iter().zip(truth.iter().filter(|t| t.1 != "hoo")) {
-        let delay = m.arrival - (played_at + t.0);
+    for (m, delay) in arrival_delays(&messages, played_at) {
         assert!(
             delay < 0.5,
             "{m:?} arrived {delay:.3} s after its sound while stdout was not read"
