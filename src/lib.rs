@@ -5,7 +5,8 @@
 //! ([`cli`]). Modules, by concern: [`config`] (TOML and command-line settings),
 //! [`audio`] (WAV in, resampling), [`pattern`] (enrolled takes), [`detect`] (the one
 //! streaming detection core), [`solver`] (the bounce solver), [`analyze`] (the offline
-//! command and its output formats), [`eval`] (scoring against an annotation).
+//! command and its output formats), [`eval`] (scoring against an annotation),
+//! [`daemon`] and [`output`] (`listen`'s threads), [`status`] (the counters they share).
 
 pub mod analyze;
 pub mod audio;
@@ -20,6 +21,7 @@ pub mod pattern;
 pub mod plot;
 pub mod record;
 pub mod solver;
+pub mod status;
 
 pub use config::{Config, DetectorSettings, Method, PatternKind};
 pub use detect::{Detector, Event};

@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use crate::config::{Config, InputSettings, PatternKind};
 use crate::daemon::capture;
-use crate::daemon::Status;
+use crate::status::Status;
 
 /// Analysis frame of the energy rule, seconds.
 const FRAME_SECONDS: f64 = 0.01;

@@ -18,7 +18,7 @@ use rtrb::{Consumer, Producer, RingBuffer};
 
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::InputSettings;
-use crate::daemon::Status;
+use crate::status::Status;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CaptureError {

@@ -11,7 +11,7 @@
 pub mod capture;
 
 use std::collections::VecDeque;
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
@@ -22,66 +22,9 @@ use rtrb::Consumer;
 use crate::audio::ChannelSelect;
 use crate::config::Config;
 use crate::detect::{Detector, Event};
-use crate::output::{self, midi, OutputMessage, OutputReport, OutputSettings, PrintMode};
+use crate::output::{self, OutputMessage, OutputReport, OutputSettings, PrintMode};
 use crate::pattern::{self, Pattern};
-
-/// Counters and levels shared by the threads. Writers never block.
-#[derive(Debug, Default)]
-pub struct Status {
-    stream_samples: AtomicU64,
-    captured_frames: AtomicU64,
-    bad_samples: AtomicU64,
-    input_rate: AtomicU32,
-    overrun_samples: AtomicU64,
-    dropped_events: AtomicU64,
-    xruns: AtomicU64,
-    level_db_bits: AtomicU32,
-}
-
-impl Status {
-    /// Stream time the detector has reached, seconds.
-    pub fn stream_seconds(&self) -> f64 {
-        let rate = self.input_rate.load(Ordering::Relaxed);
-        if rate == 0 {
-            return 0.0;
-        }
-        self.stream_samples.load(Ordering::Relaxed) as f64 / f64::from(rate)
-    }
-    /// Frames the audio device delivered to the capture callback (counted there).
-    pub fn captured_frames(&self) -> u64 {
-        self.captured_frames.load(Ordering::Relaxed)
-    }
-    pub(crate) fn add_captured(&self, frames: u64) {
-        self.captured_frames.fetch_add(frames, Ordering::Relaxed);
-    }
-    /// Input samples the detector replaced: not numbers (taken as 0) or beyond full
-    /// scale (clamped).
-    pub fn bad_samples(&self) -> u64 {
-        self.bad_samples.load(Ordering::Relaxed)
-    }
-    /// Samples the capture could not put in the ring.
-    pub fn overrun_samples(&self) -> u64 {
-        self.overrun_samples.load(Ordering::Relaxed)
-    }
-    pub(crate) fn add_overrun(&self, n: u64) {
-        self.overrun_samples.fetch_add(n, Ordering::Relaxed);
-    }
-    /// Overruns and underruns the audio device reported.
-    pub fn xruns(&self) -> u64 {
-        self.xruns.load(Ordering::Relaxed)
-    }
-    pub(crate) fn add_xrun(&self) {
-        self.xruns.fetch_add(1, Ordering::Relaxed);
-    }
-    /// Events the output thread could not take (queue full).
-    pub fn dropped_events(&self) -> u64 {
-        self.dropped_events.load(Ordering::Relaxed)
-    }
-    /// Peak level of the last block read, dBFS.
-    pub fn level_db(&self) -> f32 {
-        f32::from_bits(self.level_db_bits.load(Ordering::Relaxed))
-    }
-}
+pub use crate::status::Status;
 
 /// How channels of the ring's frames become the detector's mono input.
 #[derive(Debug, Clone, Copy)]
@@ -321,26 +264,6 @@ enum DetectorCommand {
     NewInput(Consumer<f32>, FrameLayout, Box<Detector>),
 }
 
-/// The output thread's settings from a config; `decision_delay`: the detector's
-/// [`Detector::decision_delay_bound`].
-pub fn output_settings(config: &Config, decision_delay: f64, print: PrintMode) -> OutputSettings {
-    OutputSettings {
-        osc: config.osc.clone(),
-        midi: config
-            .midi
-            .as_ref()
-            .map(|m| (m.clone(), midi::note_mappings(&config.patterns, m))),
-        bounce: (config.bounce.is_some()
-            || config
-                .osc
-                .as_ref()
-                .is_some_and(|o| o.bounce_state_rate.is_some()))
-        .then(|| config.bounce_or_default()),
-        decision_delay,
-        print,
-    }
-}
-
 fn log_bad_samples(new: u64, total: u64) {
     tracing::warn!(
         new,
@@ -557,7 +480,7 @@ pub fn listen(
     let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
     let origin = SystemTime::now();
     let output_thread = {
-        let settings = output_settings(&config, running_delay, options.print);
+        let settings = OutputSettings::from_config(&config, running_delay, options.print);
         let status = status.clone();
         std::thread::Builder::new()
             .name("onomato-output".into())
@@ -814,8 +737,8 @@ fn prepare_reload(
     let delay = detector
         .as_ref()
         .map_or(running_delay, Detector::decision_delay_bound);
-    let settings = output_settings(&config, delay, print);
-    let running_settings = output_settings(running, running_delay, print);
+    let settings = OutputSettings::from_config(&config, delay, print);
+    let running_settings = OutputSettings::from_config(running, running_delay, print);
     if settings.osc != running_settings.osc {
         changed.push("osc");
     }

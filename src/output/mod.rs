@@ -16,10 +16,10 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant, SystemTime};
 
-use crate::config::{BounceSettings, MidiSettings, OscSettings, PatternKind};
-use crate::daemon::Status;
+use crate::config::{BounceSettings, Config, MidiSettings, OscSettings, PatternKind};
 use crate::detect::Event;
 use crate::live_bounce::LiveBounce;
+use crate::status::Status;
 use midi::{MidiSink, NoteMapping};
 use osc::OscSink;
 use print::Printer;
@@ -50,6 +50,28 @@ pub struct OutputSettings {
     /// The detector's longest decision delay: the bounce states' default delay.
     pub decision_delay: f64,
     pub print: PrintMode,
+}
+
+impl OutputSettings {
+    /// The output thread's settings from a config; `decision_delay`: the detector's
+    /// [`crate::detect::Detector::decision_delay_bound`].
+    pub fn from_config(config: &Config, decision_delay: f64, print: PrintMode) -> Self {
+        Self {
+            osc: config.osc.clone(),
+            midi: config
+                .midi
+                .as_ref()
+                .map(|m| (m.clone(), midi::note_mappings(&config.patterns, m))),
+            bounce: (config.bounce.is_some()
+                || config
+                    .osc
+                    .as_ref()
+                    .is_some_and(|o| o.bounce_state_rate.is_some()))
+            .then(|| config.bounce_or_default()),
+            decision_delay,
+            print,
+        }
+    }
 }
 
 /// Messages to the output thread.
