@@ -467,7 +467,7 @@ fn run_devices() -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     writeln!(out, "audio inputs:")?;
-    match daemon::capture::list_inputs() {
+    match crate::input::list_inputs() {
         Ok(inputs) if inputs.is_empty() => writeln!(out, "  (none)")?,
         Ok(inputs) => {
             for i in inputs {

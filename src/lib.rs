@@ -6,6 +6,7 @@
 //! [`audio`] (WAV in, resampling), [`pattern`] (enrolled takes), [`detect`] (the one
 //! streaming detection core), [`solver`] (the bounce solver), [`analyze`] (the offline
 //! command and its output formats), [`eval`] (scoring against an annotation),
+//! [`input`] (the microphone and replayed files, into a ring; `listen` and `record`),
 //! [`daemon`] and [`output`] (`listen`'s threads), [`status`] (the counters they share).
 
 pub mod analyze;
@@ -15,6 +16,7 @@ pub mod config;
 pub mod daemon;
 pub mod detect;
 pub mod eval;
+pub mod input;
 pub mod live_bounce;
 pub mod output;
 pub mod pattern;

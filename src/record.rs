@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::config::{Config, InputSettings, PatternKind};
-use crate::daemon::capture;
+use crate::input;
 use crate::status::Status;
 
 /// Analysis frame of the energy rule, seconds.
@@ -356,7 +356,7 @@ fn record_from_microphone(
     err: &mut dyn Write,
 ) -> anyhow::Result<Vec<(Vec<f32>, u32)>> {
     let status = Arc::new(Status::default());
-    let (capture, mut consumer) = capture::open_capture(&options.input_settings, status, |_| {})?;
+    let (capture, mut consumer) = input::open_capture(&options.input_settings, status, |_| {})?;
     let rate = capture.rate;
     let channels = usize::from(capture.channels).max(1);
     let mut good = Vec::new();

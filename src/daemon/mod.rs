@@ -8,8 +8,6 @@
 //! output thread (`crate::output`) sends. The main thread only waits for signals and
 //! control messages. [`Status`] is shared by all, through atomics.
 
-pub mod capture;
-
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
@@ -22,6 +20,7 @@ use rtrb::Consumer;
 use crate::audio::ChannelSelect;
 use crate::config::Config;
 use crate::detect::{Detector, Event};
+use crate::input;
 use crate::output::{self, OutputMessage, OutputReport, OutputSettings, PrintMode};
 use crate::pattern::{self, Pattern};
 pub use crate::status::Status;
@@ -253,7 +252,7 @@ pub struct ListenReport {
 enum Control {
     Signal(i32),
     InputEnded,
-    CaptureFault(capture::StreamFault),
+    CaptureFault(input::StreamFault),
 }
 
 enum DetectorCommand {
@@ -282,7 +281,7 @@ const REOPEN_EVERY: Duration = Duration::from_secs(2);
 
 /// The microphone, watched: opened again when it fails or stalls.
 struct Microphone {
-    capture: Option<capture::Capture>,
+    capture: Option<input::Capture>,
     select: ChannelSelect,
     control: mpsc::Sender<Control>,
     status: Arc<Status>,
@@ -299,9 +298,9 @@ impl Microphone {
     fn open(
         &mut self,
         config: &Config,
-    ) -> Result<(u32, FrameLayout, Consumer<f32>), capture::CaptureError> {
+    ) -> Result<(u32, FrameLayout, Consumer<f32>), input::CaptureError> {
         let tx = self.control.clone();
-        let (c, consumer) = capture::open_capture(&config.input, self.status.clone(), move |f| {
+        let (c, consumer) = input::open_capture(&config.input, self.status.clone(), move |f| {
             let _ = tx.send(Control::CaptureFault(f));
         })?;
         tracing::info!(device = %c.device, rate = c.rate, channels = c.channels, "capturing");
@@ -316,7 +315,7 @@ impl Microphone {
     }
 
     /// Drops a capture that failed or stalled; returns whether it did.
-    fn check(&mut self, fault: Option<&capture::StreamFault>) -> bool {
+    fn check(&mut self, fault: Option<&input::StreamFault>) -> bool {
         let now = std::time::Instant::now();
         let position = self.status.captured_frames();
         if position != self.last_position {
@@ -376,7 +375,7 @@ impl Microphone {
 /// Closes a capture without risking the caller: a stream whose sound server died can
 /// hang in its backend when it is closed (ALSA's PulseAudio plugin does), so it is
 /// closed on a thread of its own, waited for one second at most.
-fn release_capture(capture: capture::Capture) {
+fn release_capture(capture: input::Capture) {
     let (done_tx, done_rx) = mpsc::channel::<()>();
     let spawned = std::thread::Builder::new()
         .name("onomato-close-input".into())
@@ -438,7 +437,7 @@ pub fn listen(
     let mut replay = None;
     let (mut rate, layout, consumer) = match &options.input_file {
         Some(path) => {
-            let (r, consumer) = capture::spawn_replay(
+            let (r, consumer) = input::spawn_replay(
                 path,
                 select,
                 block_frames,

@@ -1,4 +1,4 @@
-//! Audio into the daemon's ring: the microphone through cpal ([`open_capture`]), or a
+//! Audio into a ring, for `listen` and `record`: the microphone through cpal ([`open_capture`]), or a
 //! WAV file replayed in real time (or faster) by its own thread ([`spawn_replay`]).
 //! Both write interleaved `f32` frames into the same preallocated lock-free ring
 //! (rtrb) that the detector thread reads.
