@@ -41,6 +41,9 @@ struct Server(Child);
 #[cfg(feature = "jack")]
 impl Drop for Server {
     fn drop(&mut self) {
+        if let Ok(Some(_)) = self.0.try_wait() {
+            return;
+        }
         // SAFETY: kill(2) on our own child's pid.
         unsafe { libc::kill(self.0.id() as libc::pid_t, libc::SIGTERM) };
         let start = Instant::now();
@@ -422,22 +425,44 @@ impl Jack {
         }
     }
 
+    /// Kills the server as a crash would (SIGKILL), then its receiver: a receiver that
+    /// outlived its server would share the restarted server's wake-ups with the new
+    /// receiver of the same name (jack2 reuses the dead server's synchronisation files).
+    fn crash(self) -> PathBuf {
+        let Jack {
+            _dump,
+            mut _server,
+            dump,
+            ..
+        } = self;
+        let _ = _server.0.kill();
+        let _ = _server.0.wait();
+        drop(_dump);
+        dump
+    }
+
     /// (status byte, note, velocity) of every message received.
     fn messages(&self) -> Vec<(u8, u8, u8)> {
-        read(&self.dump)
-            .lines()
-            .filter_map(|l| {
-                let (_, rest) = l.split_once(':')?;
-                let b: Vec<u8> = rest
-                    .split_whitespace()
-                    .take(3)
-                    .map(|h| u8::from_str_radix(h, 16))
-                    .collect::<Result<_, _>>()
-                    .ok()?;
-                (b.len() == 3).then(|| (b[0], b[1], b[2]))
-            })
-            .collect()
+        midi_messages(&self.dump)
     }
+}
+
+/// (status byte, note, velocity) of every message `jack_midi_dump` printed to `dump`.
+#[cfg(feature = "jack")]
+fn midi_messages(dump: &Path) -> Vec<(u8, u8, u8)> {
+    read(dump)
+        .lines()
+        .filter_map(|l| {
+            let (_, rest) = l.split_once(':')?;
+            let b: Vec<u8> = rest
+                .split_whitespace()
+                .take(3)
+                .map(|h| u8::from_str_radix(h, 16))
+                .collect::<Result<_, _>>()
+                .ok()?;
+            (b.len() == 3).then(|| (b[0], b[1], b[2]))
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------- the daemon
@@ -1510,6 +1535,128 @@ mod jack {
         assert!(
             notes.iter().all(|n| [42, 38, 36, 60].contains(n)),
             "{notes:?}"
+        );
+    }
+
+    #[test]
+    fn a_jack_server_killed_and_restarted_gets_the_notes_that_were_on_released_and_the_later_notes()
+    {
+        let dir = common::temp_dir("listen-jack-restart");
+        let (before_dir, after_dir) = (dir.join("before"), dir.join("after"));
+        fs::create_dir_all(&before_dir).unwrap();
+        fs::create_dir_all(&after_dir).unwrap();
+        let before = Jack::start(&before_dir, "restart");
+        let server = before.name.clone();
+        let config = dir.join("midi.toml");
+        // A long gate, so that notes are on when the server dies.
+        fs::write(
+            &config,
+            format!(
+                "{}\n[midi]\nconnect = \"midi-monitor\"\ngate_seconds = 1.0\n",
+                all_example_patterns()
+            ),
+        )
+        .unwrap();
+        let config_arg = config.to_string_lossy().into_owned();
+        let mut d = start_listen(
+            &dir,
+            &[
+                "-c",
+                &config_arg,
+                "--input",
+                "examples/beat.wav",
+                "--repeat",
+                "3",
+                "--speed",
+                "2",
+                "--print",
+                "json",
+            ],
+            |c| {
+                c.env("JACK_DEFAULT_SERVER", &server)
+                    .env("JACK_NO_START_SERVER", "1")
+            },
+        );
+        wait_for_text(&d.stderr, "MIDI output open", Duration::from_secs(10));
+        // The third sound's note has left; the server dies while it is on.
+        let start = Instant::now();
+        while read(&d.stdout).lines().count() < 3 {
+            assert!(start.elapsed() < Duration::from_secs(10), "no events");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        let before_dump = before.crash();
+        wait_for_text(&d.stderr, "MIDI output lost", Duration::from_secs(5));
+        let after = Jack::start(&after_dir, "restart");
+        let start = Instant::now();
+        while read(&d.stderr).matches("MIDI output open").count() < 2 {
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "the port did not come back: {}",
+                read(&d.stderr)
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let status = wait_exit(&mut d.child, Duration::from_secs(30));
+        assert!(status.success(), "{}", read(&d.stderr));
+        std::thread::sleep(Duration::from_millis(300));
+        let log = read(&d.stderr);
+        assert!(log.contains("midi_ports_lost=1"), "{log}");
+
+        // The notes the first server's receiver was left with.
+        let mut left_on: Vec<(u8, u8)> = Vec::new();
+        let first = midi_messages(&before_dump);
+        for m in &first {
+            match m.0 & 0xF0 {
+                0x90 => left_on.push((m.0, m.1)),
+                0x80 => {
+                    let i = left_on
+                        .iter()
+                        .position(|&(s, n)| (s & 0x0F, n) == (m.0 & 0x0F, m.1))
+                        .unwrap_or_else(|| panic!("note-off without note-on: {first:?}"));
+                    left_on.remove(i);
+                }
+                _ => {}
+            }
+        }
+        assert!(
+            !left_on.is_empty(),
+            "no note was on at the crash: {first:?}"
+        );
+        // The restarted server's receiver: the note-offs owed first, then whole notes.
+        let second = after.messages();
+        let owed: Vec<(u8, u8)> = second
+            .iter()
+            .take_while(|m| m.0 & 0xF0 == 0x80)
+            .map(|m| (m.0 & 0x0F, m.1))
+            .collect();
+        for (status, note) in &left_on {
+            assert!(
+                owed.contains(&(status & 0x0F, *note)),
+                "note {note} on at the crash was not released on reconnect: {second:?}"
+            );
+        }
+        let mut sounding: Vec<(u8, u8)> = Vec::new();
+        for m in &second[owed.len()..] {
+            match m.0 & 0xF0 {
+                0x90 => sounding.push((m.0 & 0x0F, m.1)),
+                0x80 => {
+                    let i = sounding
+                        .iter()
+                        .position(|s| *s == (m.0 & 0x0F, m.1))
+                        .unwrap_or_else(|| panic!("note-off without note-on: {second:?}"));
+                    sounding.remove(i);
+                }
+                _ => {}
+            }
+        }
+        assert!(sounding.is_empty(), "notes left on: {sounding:?}");
+        // The last play of the three (10-15 s of wall time) is wholly after the
+        // restart: its 13 sounds at least.
+        let later_ons = second.iter().filter(|m| m.0 & 0xF0 == 0x90).count();
+        assert!(
+            later_ons >= 13,
+            "{later_ons} notes after the restart: {second:?}"
         );
     }
 

@@ -649,6 +649,7 @@ pub fn listen(
         osc_errors = report.output.osc.send_errors,
         note_ons = report.output.midi.note_ons,
         note_offs = report.output.midi.note_offs,
+        midi_ports_lost = report.output.midi.ports_lost,
         printed_lines_dropped = report.output.print_dropped,
         bad_samples = status.bad_samples(),
         "stopped"

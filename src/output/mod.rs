@@ -377,6 +377,7 @@ fn add_midi(report: &mut OutputReport, c: midi::MidiCounters) {
     report.midi.note_ons += c.note_ons;
     report.midi.note_offs += c.note_offs;
     report.midi.send_errors += c.send_errors;
+    report.midi.ports_lost += c.ports_lost;
 }
 
 fn collect(sinks: &Sinks, report: &mut OutputReport) {

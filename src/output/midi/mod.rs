@@ -1,30 +1,43 @@
-//! [`MidiSink`]: plays events as MIDI notes through midir (ALSA sequencer by default,
-//! JACK with the `jack` cargo feature). Each pattern has a note and a channel; the
-//! velocity follows the strength through the configured curve. An impulse is a note-on
-//! and a note-off after the gate; a continuous event holds its note from begin to end
-//! (with an optional control change carrying its strength). Every note that is on is
-//! known, so all are released on stop, on reload and when a held sound is cut off.
+//! [`MidiSink`]: plays events as MIDI notes on a port of the ALSA sequencer (midir) or,
+//! with the `jack` cargo feature, of a JACK server. Each pattern has a note and a
+//! channel; the velocity follows the strength through the configured curve. An impulse
+//! is a note-on and a note-off after the gate; a continuous event holds its note from
+//! begin to end (with an optional control change carrying its strength). Every note that
+//! is on is known, so all are released on stop, on reload and when a held sound is cut
+//! off; a note-off that cannot be sent (the port is away, the server died) is owed and
+//! sent as soon as a port is open again.
 //!
 //! Owned by the output thread: sending MIDI is not real-time safe in most backends. A
-//! port that cannot be opened is logged and retried; it never stops the daemon.
+//! port that cannot be opened, or whose server goes away, is logged and retried; it
+//! never stops the daemon.
 
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
-
-use midir::{MidiOutput, MidiOutputConnection};
 
 use crate::config::{MidiPortChoice, MidiSettings, PatternKind, PatternSpec};
 use crate::detect::Event;
 
-/// What MIDI needs on this build, for error messages.
-#[cfg(feature = "jack")]
-const BACKEND_HINT: &str = "this build sends MIDI through JACK: is a JACK server running?";
 #[cfg(not(feature = "jack"))]
-const BACKEND_HINT: &str =
-    "this build sends MIDI through the ALSA sequencer (/dev/snd/seq); build with --features jack for JACK";
+mod alsa;
+#[cfg(not(feature = "jack"))]
+use alsa as backend;
+#[cfg(feature = "jack")]
+mod jack;
+#[cfg(feature = "jack")]
+use jack as backend;
+
+use backend::Connection;
 
 /// Client name the port is opened under.
 pub const CLIENT_NAME: &str = "onomato";
-const RETRY: Duration = Duration::from_secs(5);
+/// How often a port that cannot be opened is tried again: a restarted server is
+/// found within this.
+const RETRY: Duration = Duration::from_secs(2);
+/// Failed attempts between two warnings in the log: one a minute.
+const WARN_EVERY: u64 = 30;
+/// How far back note-offs are remembered: longer than a server's cycle and than the
+/// output thread takes to notice a lost port.
+const RECENT_OFFS: Duration = Duration::from_secs(2);
 
 /// Where a pattern's notes go.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -57,6 +70,8 @@ struct SoundingNote {
     event: u64,
     /// When an impulse's gate closes; `None` for a held note.
     off_at: Option<Instant>,
+    /// Whether its note-on left (no port, no note-off).
+    on_sent: bool,
 }
 
 /// Counters of what was sent.
@@ -65,17 +80,25 @@ pub struct MidiCounters {
     pub note_ons: u64,
     pub note_offs: u64,
     pub send_errors: u64,
+    /// Ports lost under the daemon (their server stopped or died).
+    pub ports_lost: u64,
 }
 
 /// The MIDI sender.
 pub struct MidiSink {
     settings: MidiSettings,
     mappings: Vec<NoteMapping>,
-    connection: Option<MidiOutputConnection>,
+    connection: Option<Connection>,
     next_connect: Instant,
     sounding: Vec<SoundingNote>,
     /// Held sounds whose note a reload released: their end plays nothing.
     released_held: Vec<u64>,
+    /// Note-offs (note, channel) of notes that went on and could not be released:
+    /// sent first when a port is open again.
+    owed_offs: Vec<(u8, u8)>,
+    /// The note-offs sent in the last [`RECENT_OFFS`], with when: those the port may
+    /// not have delivered when its server died are sent again.
+    recent_offs: VecDeque<(u8, u8, Instant)>,
     counters: MidiCounters,
     last_sent: Option<Instant>,
     open_failures: u64,
@@ -90,6 +113,8 @@ impl MidiSink {
             next_connect: Instant::now(),
             sounding: Vec::with_capacity(64),
             released_held: Vec::new(),
+            owed_offs: Vec::with_capacity(64),
+            recent_offs: VecDeque::with_capacity(64),
             counters: MidiCounters::default(),
             last_sent: None,
             open_failures: 0,
@@ -107,25 +132,64 @@ impl MidiSink {
             return;
         }
         self.next_connect = now + RETRY;
-        match open_port(&self.settings.port) {
+        match Connection::open(CLIENT_NAME, &self.settings.port) {
             Ok(c) => {
-                tracing::info!(port = %describe(&self.settings.port), "MIDI output open");
+                tracing::info!(port = %describe(&self.settings.port), owed_note_offs = self.owed_offs.len(), "MIDI output open");
                 self.connection = Some(c);
                 self.open_failures = 0;
+                for (note, channel) in std::mem::take(&mut self.owed_offs) {
+                    self.note_off(note, channel);
+                }
             }
             Err(e) => {
                 // The first failure, then one a minute: a port that is away for hours
                 // must not flood the log.
                 self.open_failures += 1;
-                if self.open_failures % 12 == 1 {
-                    tracing::warn!(port = %describe(&self.settings.port), error = %e, attempts = self.open_failures, "cannot open MIDI output; retrying every 5 s");
+                if self.open_failures % WARN_EVERY == 1 {
+                    tracing::warn!(port = %describe(&self.settings.port), error = %e, attempts = self.open_failures, "cannot open MIDI output; retrying every {} s", RETRY.as_secs());
                 }
             }
         }
     }
 
+    /// Drops a connection whose server went away. The notes it had on went with the
+    /// server: their note-offs are owed to the next port, and the held sounds among
+    /// them play nothing at their end.
+    fn check_lost(&mut self, now: Instant) {
+        let Some(why) = self.connection.as_ref().and_then(Connection::lost) else {
+            return;
+        };
+        let undelivered = self
+            .connection
+            .as_ref()
+            .and_then(Connection::undelivered_since);
+        self.connection = None;
+        self.counters.ports_lost += 1;
+        if let Some(since) = undelivered {
+            for &(note, channel, at) in &self.recent_offs {
+                if at >= since && !self.owed_offs.contains(&(note, channel)) {
+                    self.owed_offs.push((note, channel));
+                }
+            }
+        }
+        self.recent_offs.clear();
+        for s in self.sounding.drain(..) {
+            if s.off_at.is_none() {
+                self.released_held.push(s.event);
+            }
+            if s.on_sent && !self.owed_offs.contains(&(s.note, s.channel)) {
+                self.owed_offs.push((s.note, s.channel));
+            }
+        }
+        tracing::warn!(port = %describe(&self.settings.port), reason = %why, owed_note_offs = self.owed_offs.len(), "MIDI output lost; reopening every {} s", RETRY.as_secs());
+        self.next_connect = now;
+        self.connect(now);
+    }
+
     fn send(&mut self, bytes: &[u8]) -> bool {
-        self.connect(Instant::now());
+        let now = Instant::now();
+        self.check_lost(now);
+        self.connect(now);
         let Some(c) = self.connection.as_mut() else {
             self.counters.send_errors += 1;
             return false;
@@ -145,15 +209,29 @@ impl MidiSink {
         }
     }
 
-    fn note_on(&mut self, note: u8, channel: u8, velocity: u8) {
-        if self.send(&[0x90 | (channel - 1), note, velocity.clamp(1, 127)]) {
+    fn note_on(&mut self, note: u8, channel: u8, velocity: u8) -> bool {
+        let sent = self.send(&[0x90 | (channel - 1), note, velocity.clamp(1, 127)]);
+        if sent {
             self.counters.note_ons += 1;
         }
+        sent
     }
 
     fn note_off(&mut self, note: u8, channel: u8) {
         if self.send(&[0x80 | (channel - 1), note, 0]) {
             self.counters.note_offs += 1;
+            let now = Instant::now();
+            while self
+                .recent_offs
+                .front()
+                .is_some_and(|&(_, _, at)| now.duration_since(at) > RECENT_OFFS)
+                || self.recent_offs.len() >= 64
+            {
+                self.recent_offs.pop_front();
+            }
+            self.recent_offs.push_back((note, channel, now));
+        } else if !self.owed_offs.contains(&(note, channel)) {
+            self.owed_offs.push((note, channel));
         }
     }
 
@@ -202,12 +280,13 @@ impl MidiSink {
         if let (true, Some(cc)) = (held, self.settings.strength_cc) {
             self.send(&[0xB0 | (channel - 1), cc, velocity.min(127)]);
         }
-        self.note_on(note, channel, velocity);
+        let on_sent = self.note_on(note, channel, velocity);
         self.sounding.push(SoundingNote {
             note,
             channel,
             event,
             off_at,
+            on_sent,
         });
     }
 
@@ -216,7 +295,9 @@ impl MidiSink {
         while i < self.sounding.len() {
             if hit(&self.sounding[i]) {
                 let s = self.sounding.swap_remove(i);
-                self.note_off(s.note, s.channel);
+                if s.on_sent {
+                    self.note_off(s.note, s.channel);
+                }
             } else {
                 i += 1;
             }
@@ -225,10 +306,9 @@ impl MidiSink {
 
     /// Sends the note-offs whose gate has closed.
     pub fn release_due(&mut self, now: Instant) {
+        self.check_lost(now);
         self.release_matching(|s| s.off_at.is_some_and(|t| t <= now));
-        if self.connection.is_none() {
-            self.connect(now);
-        }
+        self.connect(now);
     }
 
     /// When the next gate closes.
@@ -266,7 +346,11 @@ impl Drop for MidiSink {
     /// Releases every note and gives the backend time to deliver the note-offs: JACK
     /// sends them in its next process cycles, after `send` has returned.
     fn drop(&mut self) {
+        self.check_lost(Instant::now());
         self.release_all();
+        if !self.owed_offs.is_empty() {
+            tracing::warn!(port = %describe(&self.settings.port), owed_note_offs = self.owed_offs.len(), "MIDI output closed with notes it could not release: no port is open");
+        }
         if let Some(sent) = self.last_sent {
             let since = sent.elapsed();
             if since < DELIVERY_GRACE {
@@ -286,64 +370,25 @@ fn describe(port: &MidiPortChoice) -> String {
     }
 }
 
-/// Opens the configured port.
-fn open_port(choice: &MidiPortChoice) -> Result<MidiOutputConnection, String> {
-    let output = MidiOutput::new(CLIENT_NAME)
-        .map_err(|e| format!("MIDI is not available: {e} ({BACKEND_HINT})"))?;
-    match choice {
-        MidiPortChoice::Connect(wanted) => {
-            let ports = output.ports();
-            let names: Vec<String> = ports
-                .iter()
-                .map(|p| output.port_name(p).unwrap_or_default())
-                .collect();
-            let needle = wanted.to_lowercase();
-            let Some(i) = names
-                .iter()
-                .position(|n| n.to_lowercase().contains(&needle))
-            else {
-                return Err(format!(
-                    "no MIDI output port name contains '{wanted}'; ports: {}",
-                    if names.is_empty() {
-                        "none".to_string()
-                    } else {
-                        names.join(", ")
-                    }
-                ));
-            };
-            output
-                .connect(&ports[i], "out")
-                .map_err(|e| format!("cannot connect to '{}': {e}", names[i]))
-        }
-        MidiPortChoice::Virtual(name) => open_virtual(output, name),
-    }
-}
-
-#[cfg(unix)]
-fn open_virtual(output: MidiOutput, name: &str) -> Result<MidiOutputConnection, String> {
-    use midir::os::unix::VirtualOutput;
-    output
-        .create_virtual(name)
-        .map_err(|e| format!("cannot open virtual port '{name}': {e}"))
-}
-
-#[cfg(not(unix))]
-fn open_virtual(_output: MidiOutput, name: &str) -> Result<MidiOutputConnection, String> {
-    Err(format!(
-        "virtual MIDI ports are not available on this system; set [midi] connect to an existing port instead of virtual_port '{name}'"
-    ))
-}
-
-/// Names of the MIDI output ports that can be connected to.
-pub fn list_ports() -> Result<Vec<String>, String> {
-    let output = MidiOutput::new(CLIENT_NAME).map_err(|e| format!("MIDI is not available: {e}"))?;
-    Ok(output
-        .ports()
+/// Index of the first port whose name contains `wanted` (case-insensitive).
+fn find_port(names: &[String], wanted: &str) -> Result<usize, String> {
+    let needle = wanted.to_lowercase();
+    names
         .iter()
-        .map(|p| {
-            output
-                .port_name(p)
-                .unwrap_or_else(|e| format!("(unnamed: {e})"))
+        .position(|n| n.to_lowercase().contains(&needle))
+        .ok_or_else(|| {
+            format!(
+                "no MIDI port name contains '{wanted}'; ports: {}",
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            )
         })
-        .collect())
+}
+
+/// Names of the MIDI ports that `[midi] connect` can name.
+pub fn list_ports() -> Result<Vec<String>, String> {
+    backend::list_ports(CLIENT_NAME)
 }
