@@ -650,6 +650,7 @@ pub fn listen(
         note_ons = report.output.midi.note_ons,
         note_offs = report.output.midi.note_offs,
         midi_ports_lost = report.output.midi.ports_lost,
+        midi_server_xruns = report.output.midi.server_xruns,
         printed_lines_dropped = report.output.print_dropped,
         bad_samples = status.bad_samples(),
         "stopped"

@@ -378,6 +378,7 @@ fn add_midi(report: &mut OutputReport, c: midi::MidiCounters) {
     report.midi.note_offs += c.note_offs;
     report.midi.send_errors += c.send_errors;
     report.midi.ports_lost += c.ports_lost;
+    report.midi.server_xruns += c.server_xruns;
 }
 
 fn collect(sinks: &Sinks, report: &mut OutputReport) {

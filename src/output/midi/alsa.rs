@@ -44,6 +44,11 @@ impl Connection {
         None
     }
 
+    /// Late cycles reported by a server: the sequencer has none.
+    pub fn server_xruns(&self) -> u64 {
+        0
+    }
+
     /// Why the port is gone, if it is: the sequencer has no server that can die under
     /// its clients, so never.
     pub fn lost(&self) -> Option<String> {

@@ -46,6 +46,9 @@ struct ShutDown {
     happened: AtomicBool,
     /// JACK's status bits at the shutdown.
     status: AtomicU32,
+    /// Cycles the server reported late (xruns): a receiver late in a cycle misses the
+    /// messages of that cycle.
+    xruns: AtomicU64,
 }
 
 /// When JACK's process thread last began a cycle, in nanoseconds after `base`.
@@ -62,6 +65,11 @@ impl NotificationHandler for Watch {
         // Called on a JACK thread as a signal handler would be: atomics only.
         self.0.status.store(status.bits(), Ordering::Relaxed);
         self.0.happened.store(true, Ordering::Release);
+    }
+
+    fn xrun(&mut self, _: &Client) -> Control {
+        self.0.xruns.fetch_add(1, Ordering::Relaxed);
+        Control::Continue
     }
 }
 
@@ -161,6 +169,11 @@ impl Connection {
     pub fn undelivered_since(&self) -> Option<Instant> {
         let nanos = self.cycle.last_start.load(Ordering::Relaxed);
         Some(self.cycle.base + Duration::from_nanos(nanos))
+    }
+
+    /// Late cycles (xruns) the server has reported to this client.
+    pub fn server_xruns(&self) -> u64 {
+        self.shut_down.xruns.load(Ordering::Relaxed)
     }
 
     /// Why the port is gone, if the server shut the client down.

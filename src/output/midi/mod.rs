@@ -82,6 +82,9 @@ pub struct MidiCounters {
     pub send_errors: u64,
     /// Ports lost under the daemon (their server stopped or died).
     pub ports_lost: u64,
+    /// Late cycles (xruns) a JACK server reported: its receivers may have missed the
+    /// messages of those cycles.
+    pub server_xruns: u64,
 }
 
 /// The MIDI sender.
@@ -124,7 +127,9 @@ impl MidiSink {
     }
 
     pub fn counters(&self) -> MidiCounters {
-        self.counters
+        let mut c = self.counters;
+        c.server_xruns += self.connection.as_ref().map_or(0, Connection::server_xruns);
+        c
     }
 
     fn connect(&mut self, now: Instant) {
@@ -163,6 +168,7 @@ impl MidiSink {
             .connection
             .as_ref()
             .and_then(Connection::undelivered_since);
+        self.counters.server_xruns += self.connection.as_ref().map_or(0, Connection::server_xruns);
         self.connection = None;
         self.counters.ports_lost += 1;
         if let Some(since) = undelivered {
