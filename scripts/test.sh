@@ -21,6 +21,7 @@ packages=(
   puredata-core                          # the Pure Data recipe, run headless
   librsvg2-bin                           # rsvg-convert renders the plot in a test
   systemd                                # systemd-analyze rates and checks the unit
+  chromium                               # a real browser opens the page render writes
 )
 bash scripts/install-packages.sh "${packages[@]}"
 

@@ -46,6 +46,34 @@ pub enum Command {
     /// Enrol a pattern: record takes of it (from the microphone, or a file), cut each to
     /// the sound, save them beside the config and add the pattern to the config.
     Record(RecordArgs),
+    /// Draw an animation whose timing is a recording's (a ball bouncing on every hit, or
+    /// a timeline of the events), as one HTML page that plays it with the sound.
+    Render(RenderArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// The soundtrack (WAV): analysed for its events, and played with the picture.
+    pub recording: PathBuf,
+    #[command(flatten)]
+    pub source: PatternSource,
+    /// Take the events from this file (the JSON `analyze` writes, perhaps edited by
+    /// hand) instead of analysing the recording.
+    #[arg(long, value_name = "FILE.json")]
+    pub events: Option<PathBuf>,
+    /// What to draw.
+    #[arg(long, value_enum, default_value_t = crate::render::Scene::Ball)]
+    pub scene: crate::render::Scene,
+    /// Where to write the animation: an .html page (self-contained: sound and script
+    /// inside, plays offline in any browser).
+    #[arg(long, short = 'o', value_name = "OUT.html")]
+    pub output: PathBuf,
+    /// Frames per second.
+    #[arg(long, default_value_t = 60)]
+    pub fps: u32,
+    /// Frame size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    pub size: String,
 }
 
 #[derive(Debug, clap::Args)]
@@ -508,6 +536,94 @@ fn init_logging(verbose: u8, format: LogFormat, daemon: bool) {
     };
 }
 
+fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
+    let is_html = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
+    if !is_html {
+        anyhow::bail!(
+            "cannot write {}: render writes an HTML page; name the output OUT.html",
+            args.output.display()
+        );
+    }
+    let (width, height) = parse_size(&args.size)?;
+    if !(1..=240).contains(&args.fps) {
+        anyhow::bail!("--fps must be from 1 to 240, found {}", args.fps);
+    }
+    let duration = {
+        let source =
+            crate::audio::WavSource::open(&args.recording, crate::audio::ChannelSelect::Mix)
+                .map_err(analyze::AnalyzeError::Recording)?;
+        source.frames_total() as f64 / f64::from(source.sample_rate())
+    };
+    let given_patterns = args.source.config.is_some() || !args.source.patterns.is_empty();
+    let (events, bounce) = match &args.events {
+        Some(path) => {
+            let events = crate::render::read_events(path)?;
+            let config = if given_patterns {
+                args.source.to_config()?
+            } else {
+                Config::default()
+            };
+            let bounce = config
+                .bounce
+                .clone()
+                .unwrap_or_else(|| crate::render::bounce_for_events(&events));
+            (events, bounce)
+        }
+        None => {
+            let config = args.source.to_config()?;
+            let analysis = analyze::analyze_file_with(
+                &args.recording,
+                &config,
+                analyze::Keep::default(),
+                &mut |_| {},
+            )?;
+            (analysis.events, config.bounce_or_default())
+        }
+    };
+    let frames = crate::render::FrameSettings {
+        fps: args.fps,
+        width,
+        height,
+    };
+    let animation = crate::render::animate(args.scene, &events, &bounce, frames, duration);
+    let title = format!(
+        "{} — onomato",
+        args.recording
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+    );
+    crate::render::write_atomically(&args.output, |out| {
+        crate::render::write_html(&animation, &args.recording, &title, out)
+    })?;
+    eprintln!(
+        "{}: {} events, {} frames at {} fps, {}x{}",
+        args.output.display(),
+        events.len(),
+        animation.frames.len(),
+        args.fps,
+        width,
+        height
+    );
+    Ok(())
+}
+
+/// "WIDTHxHEIGHT" in pixels, each 16 to 7680.
+fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
+    let parsed = text
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h)) if (16..=7680).contains(&w) && (16..=7680).contains(&h) => Ok((w, h)),
+        _ => anyhow::bail!(
+            "--size must be WIDTHxHEIGHT in pixels, each 16 to 7680 (such as 1280x720), found '{text}'"
+        ),
+    }
+}
+
 /// Entry point of the binary: parses arguments, runs the command, prints errors.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -522,6 +638,7 @@ pub fn main() -> ExitCode {
         Command::Listen(args) => run_listen(args),
         Command::Devices => run_devices(),
         Command::Record(args) => run_record(args),
+        Command::Render(args) => run_render(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

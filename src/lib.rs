@@ -22,6 +22,7 @@ pub mod output;
 pub mod pattern;
 pub mod plot;
 pub mod record;
+pub mod render;
 pub mod solver;
 pub mod status;
 

@@ -1,0 +1,321 @@
+//! `onomato render` end to end: the page it writes is opened in a real headless Chromium
+//! (Debian's `chromium`), which draws a still of chosen moments (`#t=SECONDS`); the
+//! screenshots are read back as pixels and the ball is looked for in them.
+
+mod common;
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_onomato");
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn onomato(args: &[&str]) -> std::process::Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run onomato")
+}
+
+/// RGB pixels of a PNG: (width, height, rows of 3 bytes per pixel).
+fn read_png(path: &Path) -> (usize, usize, Vec<u8>) {
+    let file = std::io::BufReader::new(fs::File::open(path).expect("screenshot"));
+    let mut reader = png::Decoder::new(file).read_info().expect("a PNG");
+    let mut buf = vec![0; reader.output_buffer_size().expect("PNG size")];
+    let info = reader.next_frame(&mut buf).expect("PNG pixels");
+    let channels = info.line_size / info.width as usize;
+    let mut rgb = Vec::with_capacity(info.width as usize * info.height as usize * 3);
+    for row in buf[..info.line_size * info.height as usize].chunks(info.line_size) {
+        for px in row.chunks(channels) {
+            rgb.extend_from_slice(&px[..3]);
+        }
+    }
+    (info.width as usize, info.height as usize, rgb)
+}
+
+/// Chromium draws `page` at time `t` (a still) into a screenshot of `size`.
+fn still(page: &Path, t: f64, size: (u32, u32), dir: &Path) -> (usize, usize, Vec<u8>) {
+    let shot = dir.join(format!("still-{t:.3}.png"));
+    let profile = dir.join("chromium-profile");
+    let out = Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=3000",
+            &format!("--user-data-dir={}", profile.display()),
+            &format!("--window-size={},{}", size.0, size.1),
+            &format!("--screenshot={}", shot.display()),
+            &format!("file://{}#t={t}", page.display()),
+        ])
+        .output()
+        .expect("chromium (Debian's package chromium) must be installed: bash scripts/test.sh installs it");
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && shot.exists(),
+        "chromium failed: {log}"
+    );
+    for line in log.lines().filter(|l| l.contains("CONSOLE")) {
+        assert!(
+            !line.contains("Uncaught"),
+            "the page raised an error: {line}"
+        );
+    }
+    read_png(&shot)
+}
+
+/// Rows (top, bottom) and columns (left, right) of the pixels of the ball's colour.
+fn ball_box(
+    image: &(usize, usize, Vec<u8>),
+    color: [u8; 3],
+) -> Option<(usize, usize, usize, usize)> {
+    let (w, h, px) = image;
+    let mut found: Option<(usize, usize, usize, usize)> = None;
+    for y in 0..*h {
+        for x in 0..*w {
+            let p = &px[(y * w + x) * 3..][..3];
+            let near = p.iter().zip(color).all(|(a, b)| a.abs_diff(b) <= 12);
+            if near {
+                found = Some(match found {
+                    None => (y, y, x, x),
+                    Some((t, b, l, r)) => (t.min(y), b.max(y), l.min(x), r.max(x)),
+                });
+            }
+        }
+    }
+    found
+}
+
+const BLUE: [u8; 3] = [0x2f, 0x64, 0xd8];
+const RED: [u8; 3] = [0xd8, 0x3a, 0x34];
+
+/// The ball geometry the page carries.
+fn geometry(page: &Path) -> (f64, f64, f64) {
+    let html = fs::read_to_string(page).unwrap();
+    let json = html
+        .split("type=\"application/json\">")
+        .nth(1)
+        .and_then(|j| j.split("</script>").next())
+        .expect("frames in the page");
+    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    let b = &v["ball"];
+    (
+        b["floor_y"].as_f64().unwrap(),
+        b["radius"].as_f64().unwrap(),
+        b["scale"].as_f64().unwrap(),
+    )
+}
+
+#[test]
+fn the_ball_page_shows_the_ball_on_the_floor_at_each_hit_and_at_the_solvers_apex_between() {
+    let dir = common::temp_dir("render-ball");
+    let page = dir.join("beat.html");
+    let page_arg = page.to_string_lossy().into_owned();
+    let out = onomato(&[
+        "render",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--scene",
+        "ball",
+        "--fps",
+        "50",
+        "--size",
+        "640x360",
+        "-o",
+        &page_arg,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The solver's contacts for the same recording and config.
+    let solved = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--bounce",
+    ]);
+    assert!(solved.status.success());
+    let solved: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+    let contacts = solved["bounce"].as_array().unwrap();
+    let hard: Vec<&serde_json::Value> = contacts.iter().filter(|c| c["style"] == "hard").collect();
+    assert!(hard.len() >= 4, "{contacts:?}");
+    let (floor_y, radius, scale) = geometry(&page);
+    // Four hits and the flights after them: on the floor at the hit's frame, at the
+    // apex height (to 2 px) at the frame half-way to the next contact.
+    for c in hard.iter().take(4) {
+        let time = c["time"].as_f64().unwrap();
+        let image = still(&page, time, (640, 360), &dir);
+        let (top, bottom, left, right) =
+            ball_box(&image, BLUE).unwrap_or_else(|| panic!("no blue ball at {time}"));
+        assert!(
+            (bottom as f64 + 1.0 - floor_y).abs() <= 1.0,
+            "at the hit {time} the ball's lowest row is {bottom}, the floor {floor_y}"
+        );
+        assert!(((bottom - top + 1) as f64 - 2.0 * radius).abs() <= 2.0);
+        assert!(((right - left + 1) as f64 - 2.0 * radius).abs() <= 2.0);
+        let (Some(apex_time), apex) = (c["apex_time"].as_f64(), c["apex_height"].as_f64().unwrap())
+        else {
+            continue;
+        };
+        // The frame nearest the apex: its own time's height.
+        let frame_time = (apex_time * 50.0).round() / 50.0;
+        let v0 = c["launch_velocity"].as_f64().unwrap();
+        let dt = frame_time - time;
+        let height = v0 * dt - 9.81 * dt * dt / 2.0;
+        assert!(apex - height < 0.01);
+        let image = still(&page, frame_time, (640, 360), &dir);
+        let (_, bottom, _, _) =
+            ball_box(&image, BLUE).unwrap_or_else(|| panic!("no ball at {frame_time}"));
+        let drawn = floor_y - (bottom as f64 + 1.0);
+        assert!(
+            (drawn - height * scale).abs() <= 2.0,
+            "at the apex {frame_time} the ball is {drawn:.1} px up, the solver says {:.1}",
+            height * scale
+        );
+        assert!(drawn > 10.0, "the ball is in the air: {drawn:.1} px");
+    }
+}
+
+#[test]
+fn an_edited_events_file_is_rendered_with_its_own_timing_and_a_soft_bounce_is_squashed() {
+    let dir = common::temp_dir("render-events");
+    let events = dir.join("events.json");
+    // Hand-made timing: a hit at 0.5 s, a soft one at 1.3 s (strength 1: the config's
+    // [bounce] marks it soft), a hit at 2.0 s.
+    fs::write(
+        &events,
+        r#"{"events": [
+            {"pattern": "tick", "kind": "impulse", "time": 0.5, "strength": 1.0},
+            {"pattern": "pop", "kind": "impulse", "time": 1.3, "strength": 1.0},
+            {"pattern": "tick", "kind": "impulse", "time": 2.0, "strength": 0.8}
+        ]}"#,
+    )
+    .unwrap();
+    let config = dir.join("soft.toml");
+    fs::write(
+        &config,
+        "[[pattern]]\nname = \"tick\"\ntakes = [\"PATTERNS/tick.wav\"]\n\n[[pattern]]\nname = \"pop\"\ntakes = [\"PATTERNS/pop.wav\"]\n\n[bounce]\nhard = [\"tick\"]\nsoft = [\"pop\"]\n"
+            .replace("PATTERNS", &root().join("examples/patterns").to_string_lossy()),
+    )
+    .unwrap();
+    let page = dir.join("edited.html");
+    let out = onomato(&[
+        "render",
+        "examples/beat.wav",
+        "--events",
+        &events.to_string_lossy(),
+        "-c",
+        &config.to_string_lossy(),
+        "--fps",
+        "50",
+        "--size",
+        "640x360",
+        "-o",
+        &page.to_string_lossy(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (floor_y, radius, _) = geometry(&page);
+    for t in [0.5, 2.0] {
+        let (_, bottom, _, _) = ball_box(&still(&page, t, (640, 360), &dir), BLUE).expect("ball");
+        assert!(
+            (bottom as f64 + 1.0 - floor_y).abs() <= 1.0,
+            "not on the floor at {t}"
+        );
+    }
+    // Between the edited hits the ball is in the air.
+    let (_, bottom, _, _) = ball_box(&still(&page, 0.9, (640, 360), &dir), BLUE).expect("ball");
+    assert!(floor_y - (bottom as f64 + 1.0) > 30.0);
+    // The soft bounce: red, on the floor, squashed by 0.4 × strength, its area kept.
+    let (top, bottom, left, right) =
+        ball_box(&still(&page, 1.3, (640, 360), &dir), RED).expect("red ball");
+    let (w, h) = ((right - left + 1) as f64, (bottom - top + 1) as f64);
+    let squash = 0.4;
+    assert!((bottom as f64 + 1.0 - floor_y).abs() <= 1.0);
+    assert!(
+        (h - 2.0 * radius * (1.0 - squash)).abs() <= 2.0,
+        "height {h}"
+    );
+    assert!(
+        (w - 2.0 * radius / (1.0 - squash)).abs() <= 2.0,
+        "width {w}"
+    );
+}
+
+#[test]
+fn bad_render_requests_name_the_item_and_leave_nothing_behind() {
+    let dir = common::temp_dir("render-bad");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--scene", "fireworks", "-o", "x.html"], "fireworks"),
+        (&["-o", "x.avi"], "x.avi"),
+        (&["--size", "640by360", "-o", "x.html"], "640by360"),
+        (&["-o", "no/such/dir/x.html"], "no/such/dir/x.html"),
+    ];
+    // Run from the project's root so that the config resolves; outputs go to `dir`.
+    for (extra, named) in cases {
+        let mut args: Vec<String> = ["render", "examples/beat.wav", "-c", "config/onomato.toml"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        for a in extra {
+            args.push(if a.ends_with(".html") || a.ends_with(".avi") {
+                dir.join(a).to_string_lossy().into_owned()
+            } else {
+                a.to_string()
+            });
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = onomato(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(named),
+            "{args:?}: the error does not name '{named}': {err}"
+        );
+    }
+    let left: Vec<_> = fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+    // An events file with a bad event names the file and the event.
+    let events = dir.join("bad.json");
+    fs::write(
+        &events,
+        r#"{"events": [{"pattern": "tick", "kind": "impulse", "time": -1}]}"#,
+    )
+    .unwrap();
+    let out = onomato(&[
+        "render",
+        "examples/beat.wav",
+        "--events",
+        &events.to_string_lossy(),
+        "-o",
+        &dir.join("y.html").to_string_lossy(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("bad.json") && err.contains("event 0"),
+        "{err}"
+    );
+    assert!(!dir.join("y.html").exists());
+}
