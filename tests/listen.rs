@@ -450,6 +450,27 @@ impl Jack {
     }
 }
 
+/// (channel, note) of the notes still on after `messages`, in order; a note-off whose
+/// note is not on fails the test.
+#[cfg(feature = "jack")]
+fn notes_left_on(messages: &[(u8, u8, u8)]) -> Vec<(u8, u8)> {
+    let mut sounding: Vec<(u8, u8)> = Vec::new();
+    for m in messages {
+        match m.0 & 0xF0 {
+            0x90 if m.2 > 0 => sounding.push((m.0 & 0x0F, m.1)),
+            0x80 => {
+                let i = sounding
+                    .iter()
+                    .position(|s| *s == (m.0 & 0x0F, m.1))
+                    .unwrap_or_else(|| panic!("note-off without note-on {m:?} in {messages:?}"));
+                sounding.remove(i);
+            }
+            _ => {}
+        }
+    }
+    sounding
+}
+
 /// (status byte, note, velocity) of every message `jack_midi_dump` printed to `dump`.
 #[cfg(feature = "jack")]
 fn midi_messages(dump: &Path) -> Vec<(u8, u8, u8)> {
@@ -1348,20 +1369,7 @@ mod jack {
             );
         }
         // Every note-on has its note-off, on the same channel and note.
-        let mut sounding: Vec<(u8, u8)> = Vec::new();
-        for m in &midi {
-            match m.0 & 0xF0 {
-                0x90 if m.2 > 0 => sounding.push((m.0 & 0x0F, m.1)),
-                0x80 => {
-                    let i = sounding
-                        .iter()
-                        .position(|s| *s == (m.0 & 0x0F, m.1))
-                        .unwrap_or_else(|| panic!("note-off without note-on: {m:?}"));
-                    sounding.remove(i);
-                }
-                _ => {}
-            }
-        }
+        let sounding = notes_left_on(&midi);
         assert!(sounding.is_empty(), "notes left on: {sounding:?}");
         assert_eq!(offs.len(), ons.len());
     }
@@ -1612,21 +1620,8 @@ mod jack {
         assert!(log.contains("midi_ports_lost=1"), "{log}");
 
         // The notes the first server's receiver was left with.
-        let mut left_on: Vec<(u8, u8)> = Vec::new();
         let first = midi_messages(&before_dump);
-        for m in &first {
-            match m.0 & 0xF0 {
-                0x90 => left_on.push((m.0, m.1)),
-                0x80 => {
-                    let i = left_on
-                        .iter()
-                        .position(|&(s, n)| (s & 0x0F, n) == (m.0 & 0x0F, m.1))
-                        .unwrap_or_else(|| panic!("note-off without note-on: {first:?}"));
-                    left_on.remove(i);
-                }
-                _ => {}
-            }
-        }
+        let left_on = notes_left_on(&first);
         assert!(
             !left_on.is_empty(),
             "no note was on at the crash: {first:?}"
@@ -1638,26 +1633,13 @@ mod jack {
             .take_while(|m| m.0 & 0xF0 == 0x80)
             .map(|m| (m.0 & 0x0F, m.1))
             .collect();
-        for (status, note) in &left_on {
+        for (channel, note) in &left_on {
             assert!(
-                owed.contains(&(status & 0x0F, *note)),
+                owed.contains(&(*channel, *note)),
                 "note {note} on at the crash was not released on reconnect: {second:?}"
             );
         }
-        let mut sounding: Vec<(u8, u8)> = Vec::new();
-        for m in &second[owed.len()..] {
-            match m.0 & 0xF0 {
-                0x90 => sounding.push((m.0 & 0x0F, m.1)),
-                0x80 => {
-                    let i = sounding
-                        .iter()
-                        .position(|s| *s == (m.0 & 0x0F, m.1))
-                        .unwrap_or_else(|| panic!("note-off without note-on: {second:?}"));
-                    sounding.remove(i);
-                }
-                _ => {}
-            }
-        }
+        let sounding = notes_left_on(&second[owed.len()..]);
         assert!(sounding.is_empty(), "notes left on: {sounding:?}");
         // The last play of the three (10-15 s of wall time) is wholly after the
         // restart: its 13 sounds at least.
