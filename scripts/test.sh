@@ -22,6 +22,7 @@ packages=(
   librsvg2-bin                           # rsvg-convert renders the plot in a test
   systemd                                # systemd-analyze rates and checks the unit
   chromium                               # a real browser opens the page render writes
+  ffmpeg fonts-dejavu-core               # render's MP4 (encoding, labels), and ffprobe
 )
 bash scripts/install-packages.sh "${packages[@]}"
 

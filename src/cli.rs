@@ -47,7 +47,8 @@ pub enum Command {
     /// the sound, save them beside the config and add the pattern to the config.
     Record(RecordArgs),
     /// Draw an animation whose timing is a recording's (a ball bouncing on every hit, or
-    /// a timeline of the events), as one HTML page that plays it with the sound.
+    /// a timeline of the events), as an MP4 video with the sound, or one HTML page that
+    /// plays it.
     Render(RenderArgs),
 }
 
@@ -64,9 +65,10 @@ pub struct RenderArgs {
     /// What to draw.
     #[arg(long, value_enum, default_value_t = crate::render::Scene::Ball)]
     pub scene: crate::render::Scene,
-    /// Where to write the animation: an .html page (self-contained: sound and script
-    /// inside, plays offline in any browser).
-    #[arg(long, short = 'o', value_name = "OUT.html")]
+    /// Where to write the animation: an .mp4 video (H.264 and AAC, by ffmpeg) or an
+    /// .html page (self-contained: sound and script inside, plays offline in any
+    /// browser).
+    #[arg(long, short = 'o', value_name = "OUT.mp4|OUT.html")]
     pub output: PathBuf,
     /// Frames per second.
     #[arg(long, default_value_t = 60)]
@@ -537,16 +539,19 @@ fn init_logging(verbose: u8, format: LogFormat, daemon: bool) {
 }
 
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
-    let is_html = args
+    let extension = args
         .output
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
-    if !is_html {
-        anyhow::bail!(
-            "cannot write {}: render writes an HTML page; name the output OUT.html",
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let video = match extension.as_str() {
+        "mp4" => true,
+        "html" | "htm" => false,
+        _ => anyhow::bail!(
+            "cannot write {}: render writes an MP4 video or an HTML page; name the output OUT.mp4 or OUT.html",
             args.output.display()
-        );
-    }
+        ),
+    };
     let (width, height) = parse_size(&args.size)?;
     if !(1..=240).contains(&args.fps) {
         anyhow::bail!("--fps must be from 1 to 240, found {}", args.fps);
@@ -596,9 +601,27 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             .unwrap_or_default()
             .to_string_lossy()
     );
-    crate::render::write_atomically(&args.output, |out| {
-        crate::render::write_html(&animation, &args.recording, &title, out)
-    })?;
+    if video {
+        let bar = indicatif::ProgressBar::with_draw_target(
+            Some(animation.frames.len() as u64),
+            indicatif::ProgressDrawTarget::stderr(),
+        );
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "rendering {bar:40} {pos}/{len} frames  {elapsed} (about {eta} left)",
+        ) {
+            bar.set_style(style);
+        }
+        let written =
+            crate::render::write_video(&animation, &args.recording, &args.output, &mut |k| {
+                bar.set_position(k as u64)
+            });
+        bar.finish_and_clear();
+        written?;
+    } else {
+        crate::render::write_atomically(&args.output, |out| {
+            crate::render::write_html(&animation, &args.recording, &title, out)
+        })?;
+    }
     eprintln!(
         "{}: {} events, {} frames at {} fps, {}x{}",
         args.output.display(),

@@ -81,12 +81,21 @@ fn ball_box(
     image: &(usize, usize, Vec<u8>),
     color: [u8; 3],
 ) -> Option<(usize, usize, usize, usize)> {
+    ball_box_within(image, color, 12)
+}
+
+/// The same, for pixels within `tolerance` of the colour in every channel.
+fn ball_box_within(
+    image: &(usize, usize, Vec<u8>),
+    color: [u8; 3],
+    tolerance: u8,
+) -> Option<(usize, usize, usize, usize)> {
     let (w, h, px) = image;
     let mut found: Option<(usize, usize, usize, usize)> = None;
     for y in 0..*h {
         for x in 0..*w {
             let p = &px[(y * w + x) * 3..][..3];
-            let near = p.iter().zip(color).all(|(a, b)| a.abs_diff(b) <= 12);
+            let near = p.iter().zip(color).all(|(a, b)| a.abs_diff(b) <= tolerance);
             if near {
                 found = Some(match found {
                     None => (y, y, x, x),
@@ -318,4 +327,156 @@ fn bad_render_requests_name_the_item_and_leave_nothing_behind() {
         "{err}"
     );
     assert!(!dir.join("y.html").exists());
+}
+
+/// Frame `k` of a video, decoded by ffmpeg.
+fn video_frame(video: &Path, k: usize, dir: &Path) -> (usize, usize, Vec<u8>) {
+    let png = dir.join(format!("frame-{k}.png"));
+    let ok = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(video)
+        .args(["-vf", &format!("select=eq(n\\,{k})"), "-vframes", "1"])
+        .arg(&png)
+        .status()
+        .expect("ffmpeg (Debian's package ffmpeg)")
+        .success();
+    assert!(ok && png.exists(), "no frame {k}");
+    read_png(&png)
+}
+
+#[test]
+fn the_ball_video_has_the_sound_the_frame_rate_and_the_ball_where_the_solver_puts_it() {
+    let dir = common::temp_dir("render-video");
+    let render = |out: &Path| {
+        let out = onomato(&[
+            "render",
+            "examples/beat.wav",
+            "-c",
+            "config/onomato.toml",
+            "--fps",
+            "50",
+            "--size",
+            "640x360",
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let (video, page) = (dir.join("beat.mp4"), dir.join("beat.html"));
+    render(&video);
+    render(&page);
+    let probe = Command::new("ffprobe")
+        .args(["-v", "error", "-show_entries"])
+        .args([
+            "stream=codec_type,width,height,r_frame_rate:format=duration",
+            "-of",
+            "json",
+        ])
+        .arg(&video)
+        .output()
+        .expect("ffprobe");
+    let probe: serde_json::Value = serde_json::from_slice(&probe.stdout).unwrap();
+    let streams = probe["streams"].as_array().unwrap();
+    let of = |kind: &str| {
+        streams
+            .iter()
+            .filter(|s| s["codec_type"] == kind)
+            .collect::<Vec<_>>()
+    };
+    let (pictures, sounds) = (of("video"), of("audio"));
+    assert_eq!((pictures.len(), sounds.len()), (1, 1), "{probe}");
+    assert_eq!(
+        (
+            pictures[0]["width"].as_u64(),
+            pictures[0]["height"].as_u64()
+        ),
+        (Some(640), Some(360))
+    );
+    assert_eq!(pictures[0]["r_frame_rate"], "50/1");
+    let duration: f64 = probe["format"]["duration"]
+        .as_str()
+        .unwrap()
+        .parse()
+        .unwrap();
+    // beat.wav lasts 10 s: frames 0 to 500.
+    assert!(
+        (duration - 10.0).abs() <= 1.0 / 50.0 + 0.005,
+        "{duration} s"
+    );
+
+    let solved = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "-c",
+        "config/onomato.toml",
+        "--bounce",
+    ]);
+    let solved: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+    let (floor_y, _, scale) = geometry(&page);
+    let hard: Vec<&serde_json::Value> = solved["bounce"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["style"] == "hard")
+        .take(3)
+        .collect();
+    // The encoder blurs colours at edges (4:2:0): the ball's colour within 40.
+    for c in hard {
+        let time = c["time"].as_f64().unwrap();
+        let k = (time * 50.0).round() as usize;
+        let (_, bottom, _, _) = ball_box_within(&video_frame(&video, k, &dir), BLUE, 40)
+            .unwrap_or_else(|| panic!("no ball in frame {k}"));
+        assert!(
+            (bottom as f64 + 1.0 - floor_y).abs() <= 2.0,
+            "frame {k} (hit at {time}): lowest row {bottom}, floor {floor_y}"
+        );
+        let Some(apex_time) = c["apex_time"].as_f64() else {
+            continue;
+        };
+        let k = (apex_time * 50.0).round() as usize;
+        let dt = k as f64 / 50.0 - time;
+        let height = c["launch_velocity"].as_f64().unwrap() * dt - 9.81 * dt * dt / 2.0;
+        let (_, bottom, _, _) = ball_box_within(&video_frame(&video, k, &dir), BLUE, 40)
+            .unwrap_or_else(|| panic!("no ball in frame {k}"));
+        let drawn = floor_y - (bottom as f64 + 1.0);
+        assert!(
+            (drawn - height * scale).abs() <= 2.0,
+            "frame {k}: {drawn:.1} px up, the solver says {:.1}",
+            height * scale
+        );
+    }
+}
+
+#[test]
+fn without_ffmpeg_an_mp4_is_refused_by_name_and_nothing_is_left() {
+    let dir = common::temp_dir("render-no-ffmpeg");
+    let empty = dir.join("empty-path");
+    fs::create_dir_all(&empty).unwrap();
+    let out = Command::new(BIN)
+        .args([
+            "render",
+            "examples/beat.wav",
+            "-c",
+            "config/onomato.toml",
+            "-o",
+        ])
+        .arg(dir.join("x.mp4"))
+        .current_dir(root())
+        .env("PATH", &empty)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("ffmpeg") && err.contains("x.mp4"),
+        "{err}"
+    );
+    let left: Vec<_> = fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("empty-path")]);
 }

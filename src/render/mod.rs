@@ -1,12 +1,15 @@
 //! `onomato render`: the paper's animations drawn from a soundtrack's events. A scene
 //! turns the events (and the bounce solver's contacts) into a list of shapes for every
 //! frame; the writers put those frames beside the sound: a self-contained HTML page that
-//! draws them on a canvas at the audio element's current time.
+//! draws them on a canvas at the audio element's current time, or an MP4 video
+//! ([`video`]: rasterised here, encoded by ffmpeg).
 //!
 //! The shapes are the one description of a scene, so every output shows the same
 //! picture. A hit at time t is drawn at frame round(t · fps), with the ball on the floor.
 //!
 //! Runs on the main thread; allocates freely (offline).
+
+pub mod video;
 
 use std::io::Write;
 use std::path::Path;
@@ -389,6 +392,24 @@ if (still) {{
     Ok(())
 }
 
+/// Writes the animation as an MP4 video with the recording's sound, through a
+/// temporary file beside `path`: a failure (ffmpeg missing, a full disk) leaves nothing.
+pub fn write_video(
+    animation: &Animation,
+    recording: &Path,
+    path: &Path,
+    progress: &mut dyn FnMut(usize),
+) -> anyhow::Result<()> {
+    let partial = video::partial_path(path);
+    let result = video::write_mp4(animation, recording, &partial, progress).and_then(|()| {
+        std::fs::rename(&partial, path).with_context(|| format!("cannot write {}", path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
 /// One event as `analyze` writes it; only what a scene needs is required.
 #[derive(Debug, serde::Deserialize)]
 struct EventRecord {
@@ -484,12 +505,7 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let partial = dir.join(format!(".{name}.partial-{}", std::process::id()));
+    let partial = video::partial_path(path);
     let result = (|| {
         let file = std::fs::File::create(&partial)
             .with_context(|| format!("cannot write {}", path.display()))?;
