@@ -19,8 +19,9 @@ use common::root;
 
 const BIN: &str = env!("CARGO_BIN_EXE_onomato");
 
-/// The PulseAudio tests play in real time: one at a time, so that they do not starve
-/// each other of the machine's cores (a starved player inserts silence).
+/// The PulseAudio and JACK tests run servers and replay in real time: one at a time, so
+/// that they do not starve each other of the machine's cores (a starved player inserts
+/// silence; a capture started under load has lost the first second of a play).
 static REAL_TIME_AUDIO: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// A child process killed when the test ends, whatever happens.
@@ -1287,6 +1288,7 @@ mod jack {
 
     #[test]
     fn midi_notes_arrive_at_jack_with_the_configured_note_channel_and_velocity() {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-jack");
         let jack = Jack::start(&dir, "notes");
         let config = dir.join("midi.toml");
@@ -1376,6 +1378,7 @@ mod jack {
 
     #[test]
     fn reloads_that_change_the_osc_prefix_or_a_note_keep_the_jack_connection_and_the_held_sound() {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-reload-difference");
         let jack = Jack::start(&dir, "reload");
         let osc = OscDump::start(&dir);
@@ -1490,6 +1493,7 @@ mod jack {
 
     #[test]
     fn a_virtual_port_can_be_connected_to_by_another_program() {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-jack-virtual");
         let jack = Jack::start(&dir, "virtual");
         let d = start_listen(
@@ -1557,6 +1561,7 @@ mod jack {
     #[test]
     fn a_jack_server_killed_and_restarted_gets_the_notes_that_were_on_released_and_the_later_notes()
     {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-jack-restart");
         let (before_dir, after_dir) = (dir.join("before"), dir.join("after"));
         fs::create_dir_all(&before_dir).unwrap();
@@ -1652,6 +1657,7 @@ mod jack {
 
     #[test]
     fn sigterm_during_a_held_sound_releases_its_note() {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-jack-cutoff");
         let jack = Jack::start(&dir, "cutoff");
         let d = listen_to_held_tone(&dir, &["--midi", "midi-monitor"], |c| {
