@@ -30,6 +30,9 @@ pub enum Scene {
     Ball,
     /// Every event on a strip over time, with its label and strength, and a playhead.
     Timeline,
+    /// The paper's rain: each impulse drops a drop at a place of its own (the same on
+    /// every run), landing at its time, as large as it is strong.
+    Rain,
 }
 
 /// How the frames are laid out.
@@ -132,6 +135,7 @@ pub fn animate(
     match scene {
         Scene::Ball => ball(&mut animation, events, bounce, frames, count),
         Scene::Timeline => timeline(&mut animation, events, frames, count),
+        Scene::Rain => rain(&mut animation, events, frames, count),
     }
     animation
 }
@@ -227,6 +231,79 @@ fn label(c: &Contact, radius: f32) -> Shape {
         size: radius * 1.2,
         text: format!("{}  {:.2}", c.pattern, c.strength),
         color: INK,
+    }
+}
+
+/// How long a drop falls, seconds: long enough to be seen, short enough that drops of
+/// a quick rhythm do not pile up.
+const RAIN_FALL_SECONDS: f64 = 0.6;
+/// How long a splash stays, seconds.
+const RAIN_SPLASH_SECONDS: f64 = 0.25;
+
+/// A place in [0, 1) for event `id`, the same on every run (SplitMix64).
+fn place_of(id: u64) -> f64 {
+    let mut z = id.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The rain scene: each impulse is a drop falling as a dropped body does (distance
+/// growing with the square of time) from the top to the ground, touching it at the
+/// event's time, then a splash.
+fn rain(animation: &mut Animation, events: &[Event], frames: FrameSettings, count: usize) {
+    let (w, h) = (frames.width as f32, frames.height as f32);
+    let ground = (h * 0.85).round();
+    let top = h * 0.05;
+    let unit = (h * 0.02).max(2.0);
+    animation.fixed.push(Shape::Rect {
+        x: 0.0,
+        y: ground,
+        w,
+        h: h - ground,
+        color: "#c9c2b3",
+    });
+    let drops: Vec<(f64, f32, f32)> = events
+        .iter()
+        .filter(|e| e.kind == PatternKind::Impulse)
+        .map(|e| {
+            let x = w * (0.05 + 0.9 * place_of(e.id) as f32);
+            let size = unit * (0.5 + e.strength.clamp(0.0, 2.0) as f32);
+            (e.time, x, size)
+        })
+        .collect();
+    for k in 0..count {
+        let t = k as f64 / f64::from(frames.fps);
+        let mut shapes = Vec::new();
+        for &(land, x, size) in &drops {
+            let k_land = frames.frame_of(land);
+            if k < k_land && t >= land - RAIN_FALL_SECONDS {
+                let fallen = ((t - (land - RAIN_FALL_SECONDS)) / RAIN_FALL_SECONDS).powi(2) as f32;
+                shapes.push(Shape::Ellipse {
+                    cx: x,
+                    cy: top + (ground - size * 1.5 - top) * fallen,
+                    rx: size,
+                    ry: size * 1.5,
+                    color: HARD,
+                });
+            } else if k >= k_land && t < land + RAIN_SPLASH_SECONDS {
+                // Touching the ground at its frame, then spreading flat.
+                let spread = 1.0
+                    + 3.0
+                        * ((k - k_land) as f64 / f64::from(frames.fps) / RAIN_SPLASH_SECONDS)
+                            as f32;
+                let ry = size * 1.5 / spread;
+                shapes.push(Shape::Ellipse {
+                    cx: x,
+                    cy: ground - ry,
+                    rx: size * spread,
+                    ry,
+                    color: HARD,
+                });
+            }
+        }
+        animation.frames.push(shapes);
     }
 }
 
@@ -645,6 +722,38 @@ mod tests {
         let floor = a.ball.unwrap().floor_y;
         let (_, cy, _, ry) = ball_of(&a.frames[FRAMES.frame_of(1.0)]);
         assert_eq!(cy + ry, floor, "on the floor while it slides");
+    }
+
+    #[test]
+    fn each_drop_falls_faster_and_faster_and_touches_the_ground_at_its_event() {
+        let events = [hit(0, "knock", 1.0, 0.5), hit(1, "knock", 1.2, 1.5)];
+        let a = animate(Scene::Rain, &events, &settings(&[]), FRAMES, 2.0);
+        let ground = (360.0_f32 * 0.85).round();
+        let drop = |t: f64, i: usize| match &a.frames[FRAMES.frame_of(t)][i] {
+            Shape::Ellipse { cx, cy, rx, ry, .. } => (*cx, *cy, *rx, *ry),
+            _ => panic!("a drop"),
+        };
+        assert!(
+            a.frames[FRAMES.frame_of(0.3)].is_empty(),
+            "nothing before the fall"
+        );
+        // The first drop: on the ground at its frame, having fallen more in its second
+        // half than in its first.
+        let (x, cy, _, ry) = drop(1.0, 0);
+        assert_eq!(cy + ry, ground);
+        let (x0, y0, _, _) = drop(0.4, 0);
+        let (_, y1, _, _) = drop(0.7, 0);
+        let (_, y2, _, _) = drop(0.98, 0);
+        assert_eq!(x0, x, "it falls straight");
+        assert!(y1 - y0 < y2 - y1);
+        // The stronger drop is larger, elsewhere, and lands at 1.2 s.
+        let (x1, cy1, rx1, ry1) = drop(1.2, 1);
+        assert_eq!(cy1 + ry1, ground);
+        assert!(rx1 > drop(1.0, 0).2 && x1 != x);
+        // The same places on every run.
+        let again = animate(Scene::Rain, &events, &settings(&[]), FRAMES, 2.0);
+        assert_eq!(again.frames, a.frames);
+        assert!(a.frames[FRAMES.frame_of(1.9)].is_empty(), "splashes gone");
     }
 
     #[test]
