@@ -127,11 +127,9 @@ fn geometry(page: &Path) -> (f64, f64, f64) {
     )
 }
 
-#[test]
-fn the_ball_page_shows_the_ball_on_the_floor_at_each_hit_and_at_the_solvers_apex_between() {
-    let dir = common::temp_dir("render-ball");
-    let page = dir.join("beat.html");
-    let page_arg = page.to_string_lossy().into_owned();
+/// Renders the bundled example's ball scene at 50 fps, 640x360, to `out` (.html or
+/// .mp4).
+fn render_example(out: &Path) {
     let out = onomato(&[
         "render",
         "examples/beat.wav",
@@ -144,14 +142,17 @@ fn the_ball_page_shows_the_ball_on_the_floor_at_each_hit_and_at_the_solvers_apex
         "--size",
         "640x360",
         "-o",
-        &page_arg,
+        &out.to_string_lossy(),
     ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // The solver's contacts for the same recording and config.
+}
+
+/// The bounce solver's hard contacts in the bundled example (`analyze --bounce`).
+fn example_hard_contacts() -> Vec<serde_json::Value> {
     let solved = onomato(&[
         "analyze",
         "examples/beat.wav",
@@ -161,9 +162,23 @@ fn the_ball_page_shows_the_ball_on_the_floor_at_each_hit_and_at_the_solvers_apex
     ]);
     assert!(solved.status.success());
     let solved: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
-    let contacts = solved["bounce"].as_array().unwrap();
-    let hard: Vec<&serde_json::Value> = contacts.iter().filter(|c| c["style"] == "hard").collect();
-    assert!(hard.len() >= 4, "{contacts:?}");
+    solved["bounce"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["style"] == "hard")
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn the_ball_page_shows_the_ball_on_the_floor_at_each_hit_and_at_the_solvers_apex_between() {
+    let dir = common::temp_dir("render-ball");
+    let page = dir.join("beat.html");
+    render_example(&page);
+    // The solver's contacts for the same recording and config.
+    let hard = example_hard_contacts();
+    assert!(hard.len() >= 4, "{hard:?}");
     let (floor_y, radius, scale) = geometry(&page);
     // Four hits and the flights after them: on the floor at the hit's frame, at the
     // apex height (to 2 px) at the frame half-way to the next contact.
@@ -347,28 +362,9 @@ fn video_frame(video: &Path, k: usize, dir: &Path) -> (usize, usize, Vec<u8>) {
 #[test]
 fn the_ball_video_has_the_sound_the_frame_rate_and_the_ball_where_the_solver_puts_it() {
     let dir = common::temp_dir("render-video");
-    let render = |out: &Path| {
-        let out = onomato(&[
-            "render",
-            "examples/beat.wav",
-            "-c",
-            "config/onomato.toml",
-            "--fps",
-            "50",
-            "--size",
-            "640x360",
-            "-o",
-            &out.to_string_lossy(),
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    };
     let (video, page) = (dir.join("beat.mp4"), dir.join("beat.html"));
-    render(&video);
-    render(&page);
+    render_example(&video);
+    render_example(&page);
     let probe = Command::new("ffprobe")
         .args(["-v", "error", "-show_entries"])
         .args([
@@ -408,24 +404,10 @@ fn the_ball_video_has_the_sound_the_frame_rate_and_the_ball_where_the_solver_put
         "{duration} s"
     );
 
-    let solved = onomato(&[
-        "analyze",
-        "examples/beat.wav",
-        "-c",
-        "config/onomato.toml",
-        "--bounce",
-    ]);
-    let solved: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
     let (floor_y, _, scale) = geometry(&page);
-    let hard: Vec<&serde_json::Value> = solved["bounce"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["style"] == "hard")
-        .take(3)
-        .collect();
+    let hard = example_hard_contacts();
     // The encoder blurs colours at edges (4:2:0): the ball's colour within 40.
-    for c in hard {
+    for c in hard.iter().take(3) {
         let time = c["time"].as_f64().unwrap();
         let k = (time * 50.0).round() as usize;
         let (_, bottom, _, _) = ball_box_within(&video_frame(&video, k, &dir), BLUE, 40)

@@ -477,14 +477,9 @@ pub fn write_video(
     path: &Path,
     progress: &mut dyn FnMut(usize),
 ) -> anyhow::Result<()> {
-    let partial = video::partial_path(path);
-    let result = video::write_mp4(animation, recording, &partial, progress).and_then(|()| {
-        std::fs::rename(&partial, path).with_context(|| format!("cannot write {}", path.display()))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&partial);
-    }
-    result.with_context(|| format!("cannot write {}", path.display()))
+    write_through_partial(path, |partial| {
+        video::write_mp4(animation, recording, partial, progress)
+    })
 }
 
 /// One event as `analyze` writes it; only what a scene needs is required.
@@ -582,22 +577,31 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let partial = video::partial_path(path);
-    let result = (|| {
-        let file = std::fs::File::create(&partial)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        let mut out = std::io::BufWriter::new(file);
+    write_through_partial(path, |partial| {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(partial)?);
         write(&mut out)?;
-        out.into_inner()
-            .map_err(|e| e.into_error())
-            .and_then(|f| f.sync_all())
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        std::fs::rename(&partial, path).with_context(|| format!("cannot write {}", path.display()))
-    })();
+        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        Ok(())
+    })
+}
+
+/// `fill` writes the whole output into a temporary file beside `path`, which is then
+/// renamed to `path`; on any failure the temporary file is removed. Errors name `path`.
+fn write_through_partial(
+    path: &Path,
+    fill: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let partial = dir.join(format!(".{name}.partial-{}", std::process::id()));
+    let result = fill(&partial).and_then(|()| Ok(std::fs::rename(&partial, path)?));
     if result.is_err() {
         let _ = std::fs::remove_file(&partial);
     }
-    result
+    result.with_context(|| format!("cannot write {}", path.display()))
 }
 
 fn escape_html(text: &str) -> String {

@@ -5,7 +5,7 @@
 //! Runs on the main thread.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 
 use ab_glyph::{Font, FontVec, PxScale, ScaleFont};
@@ -213,16 +213,6 @@ pub fn write_mp4(
     }
     sent.context("ffmpeg stopped reading frames")?;
     Ok(())
-}
-
-/// A name beside `path` for the file being written.
-pub fn partial_path(path: &Path) -> PathBuf {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    dir.join(format!(".{name}.partial-{}", std::process::id()))
 }
 
 #[cfg(test)]
