@@ -288,8 +288,9 @@ fn an_edited_events_file_is_rendered_with_its_own_timing_and_a_soft_bounce_is_sq
 #[test]
 fn bad_render_requests_name_the_item_and_leave_nothing_behind() {
     let dir = common::temp_dir("render-bad");
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["--scene", "fireworks", "-o", "x.html"], "fireworks"),
+        (&["--fps", "0", "-o", "x.html"], "--fps"),
         (&["-o", "x.avi"], "x.avi"),
         (&["--size", "640by360", "-o", "x.html"], "640by360"),
         (&["-o", "no/such/dir/x.html"], "no/such/dir/x.html"),
