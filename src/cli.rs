@@ -46,9 +46,9 @@ pub enum Command {
     /// Enrol a pattern: record takes of it (from the microphone, or a file), cut each to
     /// the sound, save them beside the config and add the pattern to the config.
     Record(RecordArgs),
-    /// Draw an animation whose timing is a recording's (a ball bouncing on every hit, or
-    /// a timeline of the events), as an MP4 video with the sound, or one HTML page that
-    /// plays it.
+    /// Draw an animation whose timing is a recording's (a ball bouncing on every hit,
+    /// rain, darts, a laser duel, or a timeline of the events), as an MP4 video with the
+    /// sound, or one HTML page that plays it.
     Render(RenderArgs),
 }
 
@@ -56,15 +56,21 @@ pub enum Command {
 pub struct RenderArgs {
     /// The soundtrack (WAV): analysed for its events, and played with the picture.
     pub recording: PathBuf,
+    /// Another soundtrack (WAV) driving its own actor, aligned with the first at its
+    /// start; repeat for more. The config's [[render.track]] sections say which
+    /// patterns each soundtrack is searched for.
+    #[arg(long = "track", value_name = "FILE.wav")]
+    pub tracks: Vec<PathBuf>,
     #[command(flatten)]
     pub source: PatternSource,
     /// Take the events from this file (the JSON `analyze` writes, perhaps edited by
-    /// hand) instead of analysing the recording.
+    /// hand) instead of analysing the recording; with --track, once per soundtrack, in
+    /// the same order.
     #[arg(long, value_name = "FILE.json")]
-    pub events: Option<PathBuf>,
-    /// What to draw.
-    #[arg(long, value_enum, default_value_t = crate::render::Scene::Ball)]
-    pub scene: crate::render::Scene,
+    pub events: Vec<PathBuf>,
+    /// What to draw [default: the config's [render] scene, or ball].
+    #[arg(long, value_enum)]
+    pub scene: Option<crate::render::Scene>,
     /// Where to write the animation: an .mp4 video (H.264 and AAC, by ffmpeg) or an
     /// .html page (self-contained: sound and script inside, plays offline in any
     /// browser).
@@ -556,44 +562,80 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     if !(1..=240).contains(&args.fps) {
         anyhow::bail!("--fps must be from 1 to 240, found {}", args.fps);
     }
-    let duration = {
-        let source =
-            crate::audio::WavSource::open(&args.recording, crate::audio::ChannelSelect::Mix)
-                .map_err(analyze::AnalyzeError::Recording)?;
-        source.frames_total() as f64 / f64::from(source.sample_rate())
-    };
+    let soundtracks: Vec<PathBuf> = std::iter::once(args.recording.clone())
+        .chain(args.tracks.iter().cloned())
+        .collect();
+    let mut duration = 0.0_f64;
+    for path in &soundtracks {
+        let source = crate::audio::WavSource::open(path, crate::audio::ChannelSelect::Mix)
+            .map_err(analyze::AnalyzeError::Recording)?;
+        duration = duration.max(source.frames_total() as f64 / f64::from(source.sample_rate()));
+    }
+    if !args.events.is_empty() && args.events.len() != soundtracks.len() {
+        anyhow::bail!(
+            "--events given {} times for {} soundtracks: give one events file per soundtrack (the recording, then each --track), or none to analyse them",
+            args.events.len(),
+            soundtracks.len()
+        );
+    }
     let given_patterns = args.source.config.is_some() || !args.source.patterns.is_empty();
-    let (events, bounce) = match &args.events {
-        Some(path) => {
-            let events = crate::render::read_events(path)?;
-            let config = if given_patterns {
-                args.source.to_config()?
-            } else {
-                Config::default()
-            };
-            let bounce = config
-                .bounce
-                .clone()
-                .unwrap_or_else(|| crate::render::bounce_for_events(&events));
-            (events, bounce)
-        }
-        None => {
-            let config = args.source.to_config()?;
-            let analysis = analyze::analyze_file_with(
-                &args.recording,
-                &config,
-                analyze::Keep::default(),
-                &mut |_| {},
-            )?;
-            (analysis.events, config.bounce_or_default())
-        }
+    let config = if given_patterns || args.events.is_empty() {
+        args.source.to_config()?
+    } else {
+        Config::default()
     };
+    let origin = args
+        .source
+        .config
+        .as_ref()
+        .map_or("the command line".to_string(), |c| {
+            format!("config '{}'", c.display())
+        });
+    let track_patterns = &config.render.tracks;
+    if !track_patterns.is_empty() && track_patterns.len() != soundtracks.len() {
+        anyhow::bail!(
+            "{origin} has {} [[render.track]] sections for {} soundtracks (the recording and {} --track): give one per soundtrack, or none to search every soundtrack for every pattern",
+            track_patterns.len(),
+            soundtracks.len(),
+            args.tracks.len()
+        );
+    }
+    let mut tracks: Vec<Vec<crate::detect::Event>> = Vec::with_capacity(soundtracks.len());
+    for (i, path) in soundtracks.iter().enumerate() {
+        let events = match args.events.get(i) {
+            Some(file) => crate::render::read_events(file)?,
+            None => {
+                let mut own = config.clone();
+                if let Some(names) = track_patterns.get(i) {
+                    own.patterns.retain(|p| names.contains(&p.name));
+                }
+                analyze::analyze_file_with(path, &own, analyze::Keep::default(), &mut |_| {})?
+                    .events
+            }
+        };
+        tracks.push(events);
+    }
+    let patterns: Vec<(String, crate::config::PatternKind)> = if given_patterns {
+        config
+            .patterns
+            .iter()
+            .map(|p| (p.name.clone(), p.kind))
+            .collect()
+    } else {
+        crate::render::patterns_of_events(&tracks)
+    };
+    let actions = crate::render::Actions::new(&config.render, config.bounce.clone(), &patterns);
+    let scene = args
+        .scene
+        .or(config.render.scene)
+        .unwrap_or(crate::render::Scene::Ball);
     let frames = crate::render::FrameSettings {
         fps: args.fps,
         width,
         height,
     };
-    let animation = crate::render::animate(args.scene, &events, &bounce, frames, duration);
+    let animation = crate::render::animate(scene, &tracks, &actions, frames, duration);
+    let sound = crate::render::soundtrack(&soundtracks)?;
     let title = format!(
         "{} — onomato",
         args.recording
@@ -611,21 +653,21 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         ) {
             bar.set_style(style);
         }
-        let written =
-            crate::render::write_video(&animation, &args.recording, &args.output, &mut |k| {
-                bar.set_position(k as u64)
-            });
+        let written = crate::render::write_video(&animation, &sound, &args.output, &mut |k| {
+            bar.set_position(k as u64)
+        });
         bar.finish_and_clear();
         written?;
     } else {
         crate::render::write_atomically(&args.output, |out| {
-            crate::render::write_html(&animation, &args.recording, &title, out)
+            crate::render::write_html(&animation, &sound, &title, out)
         })?;
     }
     eprintln!(
-        "{}: {} events, {} frames at {} fps, {}x{}",
+        "{}: {} scene, {} events, {} frames at {} fps, {}x{}",
         args.output.display(),
-        events.len(),
+        scene.name(),
+        tracks.iter().map(Vec::len).sum::<usize>(),
         animation.frames.len(),
         args.fps,
         width,

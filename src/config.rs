@@ -86,6 +86,103 @@ pub enum ContactStyle {
     Slide,
 }
 
+/// What `onomato render` draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Scene {
+    /// A ball bouncing on the floor: it lands on every hard bounce, squashes on soft
+    /// ones by their strength and slides along the floor through held sounds.
+    Ball,
+    /// Every event on a strip over time, with its label and strength, and a playhead.
+    Timeline,
+    /// The paper's rain: each impulse drops a drop at a place of its own (the same on
+    /// every run), landing at its time, as large as it is strong.
+    Rain,
+    /// The paper's spaceship: each impulse throws a dart as large as it is strong; held
+    /// sounds move the ship up or down for exactly their spans.
+    Darts,
+    /// The paper's laser scene: shots fired low or high, a runner who jumps or slides
+    /// under them (two soundtracks: one shoots, one moves).
+    Laser,
+}
+
+impl Scene {
+    pub fn name(self) -> &'static str {
+        match self {
+            Scene::Ball => "ball",
+            Scene::Timeline => "timeline",
+            Scene::Rain => "rain",
+            Scene::Darts => "darts",
+            Scene::Laser => "laser",
+        }
+    }
+}
+
+/// What a pattern does in the darts scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DartsAction {
+    /// Throw a dart (an impulse).
+    Throw,
+    /// Move the ship up while it lasts (a held sound).
+    Up,
+    /// Move the ship down while it lasts (a held sound).
+    Down,
+}
+
+/// What a pattern does in the laser scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LaserAction {
+    /// Fire a shot at the runner's feet (an impulse).
+    ShootLow,
+    /// Fire a shot at the runner's head (an impulse).
+    ShootHigh,
+    /// The runner jumps (an impulse).
+    Jump,
+    /// The runner slides under, while it lasts (a held sound).
+    Slide,
+}
+
+/// The kind of pattern an action is made by.
+pub trait SceneAction: Copy {
+    fn kind(self) -> PatternKind;
+    fn name(self) -> &'static str;
+}
+
+impl SceneAction for DartsAction {
+    fn kind(self) -> PatternKind {
+        match self {
+            DartsAction::Throw => PatternKind::Impulse,
+            DartsAction::Up | DartsAction::Down => PatternKind::Continuous,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            DartsAction::Throw => "throw",
+            DartsAction::Up => "up",
+            DartsAction::Down => "down",
+        }
+    }
+}
+
+impl SceneAction for LaserAction {
+    fn kind(self) -> PatternKind {
+        match self {
+            LaserAction::Slide => PatternKind::Continuous,
+            _ => PatternKind::Impulse,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            LaserAction::ShootLow => "shoot_low",
+            LaserAction::ShootHigh => "shoot_high",
+            LaserAction::Jump => "jump",
+            LaserAction::Slide => "slide",
+        }
+    }
+}
+
 // ---------------------------------------------------------------- raw (as written)
 
 #[derive(Debug, Deserialize, Default)]
@@ -100,6 +197,7 @@ struct RawConfig {
     input: RawInput,
     osc: Option<RawOsc>,
     midi: Option<RawMidi>,
+    render: Option<RawRender>,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -198,6 +296,23 @@ struct RawBounce {
     #[serde(default)]
     slide: Vec<String>,
     max_squash: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRender {
+    scene: Option<Scene>,
+    darts: Option<BTreeMap<String, DartsAction>>,
+    laser: Option<BTreeMap<String, LaserAction>>,
+    rain: Option<Vec<String>>,
+    #[serde(default)]
+    track: Vec<RawTrack>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTrack {
+    patterns: Vec<String>,
 }
 
 // ---------------------------------------------------------------- validated
@@ -418,6 +533,22 @@ impl BounceSettings {
     }
 }
 
+/// `onomato render` settings, validated: which pattern does what in each scene (`None`:
+/// the scene's defaults from the patterns' kinds), and which patterns each soundtrack
+/// is searched for.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RenderSettings {
+    /// The scene drawn when the command line names none.
+    pub scene: Option<Scene>,
+    pub darts: Option<BTreeMap<String, DartsAction>>,
+    pub laser: Option<BTreeMap<String, LaserAction>>,
+    /// The patterns whose events drop a drop.
+    pub rain: Option<Vec<String>>,
+    /// The patterns of each soundtrack, in the order of the command line (the recording
+    /// first, then each `--track`). Empty: every soundtrack is searched for every pattern.
+    pub tracks: Vec<Vec<String>>,
+}
+
 pub const DEFAULT_GRAVITY: f64 = 9.81;
 pub const DEFAULT_MAX_SQUASH: f64 = 0.4;
 pub const DEFAULT_INTERVAL_SECONDS: f64 = 0.5;
@@ -434,6 +565,7 @@ pub struct Config {
     pub osc: Option<OscSettings>,
     /// `None`: no MIDI.
     pub midi: Option<MidiSettings>,
+    pub render: RenderSettings,
 }
 
 impl Config {
@@ -661,6 +793,10 @@ impl RawConfig {
             None => None,
             Some(m) => Some(m.validate(&format!("{origin}, [midi]"))?),
         };
+        let render = match self.render {
+            None => RenderSettings::default(),
+            Some(r) => r.validate(&patterns, &format!("{origin}, [render]"))?,
+        };
         Ok(Config {
             detector,
             patterns,
@@ -668,6 +804,7 @@ impl RawConfig {
             input,
             osc,
             midi,
+            render,
         })
     }
 }
@@ -1054,6 +1191,77 @@ impl RawBounce {
             max_squash,
             default_interval_seconds,
             state_delay_seconds,
+        })
+    }
+}
+
+impl RawRender {
+    fn validate(self, patterns: &[PatternSpec], item: &str) -> Result<RenderSettings, ConfigError> {
+        fn pattern<'a>(
+            patterns: &'a [PatternSpec],
+            item: &str,
+            key: &str,
+            name: &str,
+        ) -> Result<&'a PatternSpec, ConfigError> {
+            patterns.iter().find(|p| p.name == name).ok_or_else(|| {
+                invalid(
+                    item,
+                    format!("{key} names pattern '{name}', which is not defined"),
+                )
+            })
+        }
+        fn check_actions<A: SceneAction>(
+            key: &str,
+            actions: &Option<BTreeMap<String, A>>,
+            patterns: &[PatternSpec],
+            item: &str,
+        ) -> Result<(), ConfigError> {
+            for (name, action) in actions.iter().flatten() {
+                let p = pattern(patterns, item, key, name)?;
+                if p.kind != action.kind() {
+                    return Err(invalid(
+                        item,
+                        format!(
+                            "{key}: '{name}' cannot {}: that action is made by {} patterns, and '{name}' is {}",
+                            action.name(),
+                            action.kind().as_str(),
+                            p.kind.as_str()
+                        ),
+                    ));
+                }
+            }
+            Ok(())
+        }
+        check_actions("darts", &self.darts, patterns, item)?;
+        check_actions("laser", &self.laser, patterns, item)?;
+        for name in self.rain.iter().flatten() {
+            if pattern(patterns, item, "rain", name)?.kind != PatternKind::Impulse {
+                return Err(invalid(
+                    item,
+                    format!("rain: '{name}' cannot drop a drop: drops are made by impulse patterns, and '{name}' is continuous"),
+                ));
+            }
+        }
+        let mut tracks = Vec::with_capacity(self.track.len());
+        for (i, t) in self.track.into_iter().enumerate() {
+            let key = format!("track #{}", i + 1);
+            if t.patterns.is_empty() {
+                return Err(invalid(
+                    item,
+                    format!("{key}: patterns is empty; expected the names of the patterns its soundtrack is searched for"),
+                ));
+            }
+            for name in &t.patterns {
+                pattern(patterns, item, &key, name)?;
+            }
+            tracks.push(t.patterns);
+        }
+        Ok(RenderSettings {
+            scene: self.scene,
+            darts: self.darts,
+            laser: self.laser,
+            rain: self.rain,
+            tracks,
         })
     }
 }

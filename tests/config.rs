@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use onomato::config::{parse_pattern_args, Config, ContactStyle, Method, PatternKind};
+use onomato::config::{
+    parse_pattern_args, Config, ContactStyle, DartsAction, LaserAction, Method, PatternKind, Scene,
+};
 use onomato::pattern::load_patterns;
 
 fn parse_err(text: &str) -> String {
@@ -39,6 +41,15 @@ fn the_example_config_loads_with_its_patterns() {
     let patterns =
         load_patterns(&config.patterns, &config.detector).expect("example patterns load");
     assert_eq!(patterns.len(), 4);
+    let render = &config.render;
+    assert_eq!(render.scene, Some(Scene::Ball));
+    assert_eq!(render.darts.as_ref().unwrap()["hoo"], DartsAction::Up);
+    assert_eq!(
+        render.laser.as_ref().unwrap()["pop"],
+        LaserAction::ShootHigh
+    );
+    assert_eq!(render.rain.as_ref().unwrap().len(), 3);
+    assert!(render.tracks.is_empty());
 }
 
 #[test]
@@ -251,4 +262,49 @@ fn command_line_patterns_may_not_reuse_a_config_name() {
         msg.contains("pattern 'tick' is already defined in the config"),
         "{msg}"
     );
+}
+
+const TICK_AND_HOO: &str = "[[pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\n\
+[[pattern]]\nname = \"hoo\"\nkind = \"continuous\"\ntakes = [\"hoo.wav\"]\n";
+
+#[test]
+fn render_actions_and_tracks_are_checked_against_the_patterns() {
+    let render = |section: &str| parse_err(&format!("{TICK_AND_HOO}[render]\n{section}"));
+    let e = render("darts = { hoo = \"throw\" }");
+    assert!(
+        e.contains("[render]")
+            && e.contains("darts: 'hoo' cannot throw")
+            && e.contains("impulse patterns, and 'hoo' is continuous"),
+        "{e}"
+    );
+    let e = render("laser = { tick = \"slide\" }");
+    assert!(e.contains("laser: 'tick' cannot slide"), "{e}");
+    let e = render("darts = { tick = \"fly\" }");
+    assert!(
+        e.contains("fly") && e.contains("throw") && e.contains("down"),
+        "{e}"
+    );
+    let e = render("laser = { pew = \"jump\" }");
+    assert!(
+        e.contains("laser names pattern 'pew', which is not defined"),
+        "{e}"
+    );
+    let e = render("rain = [\"hoo\"]");
+    assert!(e.contains("rain: 'hoo' cannot drop a drop"), "{e}");
+    let e = render("scene = \"snow\"");
+    assert!(e.contains("snow") && e.contains("laser"), "{e}");
+    let e = render("[[render.track]]\npatterns = [\"tick\"]\n[[render.track]]\npatterns = []");
+    assert!(e.contains("track #2: patterns is empty"), "{e}");
+    let e = render("[[render.track]]\npatterns = [\"tock\"]");
+    assert!(e.contains("track #1 names pattern 'tock'"), "{e}");
+    let e = render("balls = 2");
+    assert!(e.contains("balls"), "{e}");
+    let ok = Config::parse(
+        &format!("{TICK_AND_HOO}[render]\nscene = \"darts\"\n[[render.track]]\npatterns = [\"tick\"]\n[[render.track]]\npatterns = [\"hoo\", \"tick\"]\n"),
+        Path::new("."),
+        "config 'test.toml'",
+    )
+    .unwrap();
+    assert_eq!(ok.render.scene, Some(Scene::Darts));
+    assert_eq!(ok.render.tracks, [vec!["tick"], vec!["hoo", "tick"]]);
 }

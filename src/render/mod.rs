@@ -9,6 +9,7 @@
 //!
 //! Runs on the main thread; allocates freely (offline).
 
+mod scene;
 pub mod video;
 
 use std::io::Write;
@@ -18,22 +19,14 @@ use anyhow::Context;
 use base64::Engine as _;
 use serde::Serialize;
 
-use crate::config::{BounceSettings, ContactStyle, PatternKind};
-use crate::detect::Event;
-use crate::solver::{self, Contact, Trajectory};
+use std::collections::{BTreeMap, BTreeSet};
 
-/// What is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Scene {
-    /// A ball bouncing on the floor: it lands on every hard bounce, squashes on soft
-    /// ones by their strength and slides along the floor through held sounds.
-    Ball,
-    /// Every event on a strip over time, with its label and strength, and a playhead.
-    Timeline,
-    /// The paper's rain: each impulse drops a drop at a place of its own (the same on
-    /// every run), landing at its time, as large as it is strong.
-    Rain,
-}
+pub use crate::config::Scene;
+use crate::config::{
+    BounceSettings, ContactStyle, DartsAction, LaserAction, PatternKind, RenderSettings,
+};
+use crate::detect::Event;
+pub use scene::track_color;
 
 /// How the frames are laid out.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +68,11 @@ pub enum Shape {
         text: String,
         color: &'static str,
     },
+    /// A filled polygon through `points`.
+    Polygon {
+        points: Vec<[f32; 2]>,
+        color: &'static str,
+    },
 }
 
 /// A scene, drawn: what every frame shows over a background that does not change.
@@ -104,20 +102,93 @@ pub struct BallGeometry {
 }
 
 const BACKGROUND: &str = "#f4f1ea";
-const INK: &str = "#2b2b2b";
-const GREY: &str = "#8a8a8a";
-/// Hard bounce, soft bounce, slide: blue, red, green as in the paper's figure.
-const HARD: &str = "#2f64d8";
-const SOFT: &str = "#d83a34";
-const SLIDE: &str = "#2f9a4a";
-/// Colours of patterns on the timeline, in the order the patterns first appear.
-const PALETTE: [&str; 6] = [HARD, SOFT, SLIDE, "#c47f12", "#7b3fb5", "#1b8f9a"];
 
-/// Draws `scene` for a soundtrack of `duration_seconds` with these events.
+/// Which pattern does what, in every scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Actions {
+    /// The ball scene: which patterns are hard bounces, soft bounces, slides.
+    pub bounce: BounceSettings,
+    pub darts: BTreeMap<String, DartsAction>,
+    pub laser: BTreeMap<String, LaserAction>,
+    /// The patterns that drop a drop.
+    pub rain: BTreeSet<String>,
+}
+
+impl Actions {
+    /// The config's mappings; a scene the config does not map gets defaults from the
+    /// patterns' kinds, in their order: the ball bounces hard on impulses and slides on
+    /// held sounds; every impulse throws a dart, the first held pattern moves the ship
+    /// up and the second down; the first impulse pattern shoots low, the second high,
+    /// the others jump, held sounds slide; every impulse drops a drop.
+    pub fn new(
+        render: &RenderSettings,
+        bounce: Option<BounceSettings>,
+        patterns: &[(String, PatternKind)],
+    ) -> Self {
+        let impulses = || {
+            patterns
+                .iter()
+                .filter(|(_, k)| *k == PatternKind::Impulse)
+                .map(|(n, _)| n.clone())
+        };
+        let held = || {
+            patterns
+                .iter()
+                .filter(|(_, k)| *k == PatternKind::Continuous)
+                .map(|(n, _)| n.clone())
+        };
+        let bounce = bounce.unwrap_or_else(|| BounceSettings {
+            styles: impulses()
+                .map(|n| (n, ContactStyle::Hard))
+                .chain(held().map(|n| (n, ContactStyle::Slide)))
+                .collect(),
+            ..BounceSettings::default_for(&[])
+        });
+        let darts = render.darts.clone().unwrap_or_else(|| {
+            impulses()
+                .map(|n| (n, DartsAction::Throw))
+                .chain(held().zip([DartsAction::Up, DartsAction::Down]))
+                .collect()
+        });
+        let laser = render.laser.clone().unwrap_or_else(|| {
+            let shots = [LaserAction::ShootLow, LaserAction::ShootHigh];
+            impulses()
+                .enumerate()
+                .map(|(i, n)| (n, shots.get(i).copied().unwrap_or(LaserAction::Jump)))
+                .chain(held().map(|n| (n, LaserAction::Slide)))
+                .collect()
+        });
+        let rain = match &render.rain {
+            Some(names) => names.iter().cloned().collect(),
+            None => impulses().collect(),
+        };
+        Self {
+            bounce,
+            darts,
+            laser,
+            rain,
+        }
+    }
+}
+
+/// The patterns of events, in the order they are first heard (soundtrack by
+/// soundtrack), with their kinds: what a scene knows when no patterns are given.
+pub fn patterns_of_events(tracks: &[Vec<Event>]) -> Vec<(String, PatternKind)> {
+    let mut patterns: Vec<(String, PatternKind)> = Vec::new();
+    for e in tracks.iter().flatten() {
+        if !patterns.iter().any(|(n, _)| **n == *e.pattern) {
+            patterns.push((e.pattern.to_string(), e.kind));
+        }
+    }
+    patterns
+}
+
+/// Draws `scene` for soundtracks of `duration_seconds` (the longest) with these events,
+/// one list per soundtrack.
 pub fn animate(
     scene: Scene,
-    events: &[Event],
-    bounce: &BounceSettings,
+    tracks: &[Vec<Event>],
+    actions: &Actions,
     frames: FrameSettings,
     duration_seconds: f64,
 ) -> Animation {
@@ -133,256 +204,59 @@ pub fn animate(
         ball: None,
     };
     match scene {
-        Scene::Ball => ball(&mut animation, events, bounce, frames, count),
-        Scene::Timeline => timeline(&mut animation, events, frames, count),
-        Scene::Rain => rain(&mut animation, events, frames, count),
+        Scene::Ball => scene::ball(&mut animation, tracks, actions, frames, count),
+        Scene::Timeline => scene::timeline(&mut animation, tracks, frames, count),
+        Scene::Rain => scene::rain(&mut animation, tracks, actions, frames, count),
+        Scene::Darts => scene::darts(&mut animation, tracks, actions, frames, count),
+        Scene::Laser => scene::laser(&mut animation, tracks, actions, frames, count),
     }
     animation
 }
 
-/// The ball scene. Heights are the solver's, scaled so that the highest flight fits
-/// in the frame; the ball's x moves only while it slides.
-fn ball(
-    animation: &mut Animation,
-    events: &[Event],
-    bounce: &BounceSettings,
-    frames: FrameSettings,
-    count: usize,
-) {
-    let (w, h) = (frames.width as f32, frames.height as f32);
-    let contacts = solver::solve(events, bounce);
-    let radius = (h * 0.045).max(3.0);
-    let floor_y = (h * 0.85).round();
-    let highest = contacts
-        .iter()
-        .map(|c| c.apex_height)
-        .fold(0.0_f64, f64::max);
-    let room = f64::from(floor_y - 2.0 * radius - h * 0.08).max(1.0);
-    let scale = if highest > 0.0 { room / highest } else { 1.0 } as f32;
-    let geometry = BallGeometry {
-        floor_y,
-        radius,
-        scale,
-    };
-    animation.ball = Some(geometry);
-    animation.fixed.push(Shape::Rect {
-        x: 0.0,
-        y: floor_y,
-        w,
-        h: (h * 0.006).max(2.0),
-        color: INK,
-    });
-    let trajectory = Trajectory {
-        gravity: bounce.gravity,
-        contacts: &contacts,
-    };
-    // The frame of each contact: there the ball is on the floor whatever the frame's
-    // own time, so that a hit is seen where it is heard.
-    let contact_frame: Vec<usize> = contacts.iter().map(|c| frames.frame_of(c.time)).collect();
-    let slide_speed = f64::from(w) * 0.25;
-    let (left, span) = (f64::from(w) * 0.15, f64::from(w) * 0.7);
-    for k in 0..count {
-        let t = k as f64 / f64::from(frames.fps);
-        let on_contact = contact_frame.iter().position(|&f| f == k);
-        let height = if on_contact.is_some() {
-            0.0
-        } else {
-            trajectory.height_at(t)
-        };
-        // Time spent sliding before t moves the ball along the floor, wrapping.
-        let slid: f64 = contacts
-            .iter()
-            .filter(|c| c.style == ContactStyle::Slide)
-            .map(|c| (t.min(c.end) - c.time).max(0.0))
-            .sum();
-        let cx = (left + (slid * slide_speed) % span) as f32;
-        let last = on_contact
-            .map(|i| &contacts[i])
-            .or_else(|| contacts.iter().rev().find(|c| c.time <= t));
-        let color = match last.map(|c| c.style) {
-            None => GREY,
-            Some(ContactStyle::Hard) => HARD,
-            Some(ContactStyle::Soft) => SOFT,
-            Some(ContactStyle::Slide) => SLIDE,
-        };
-        // A soft bounce's frame squashes the ball, its area kept.
-        let squash = on_contact.map_or(0.0, |i| contacts[i].squash) as f32;
-        let (rx, ry) = (radius / (1.0 - squash), radius * (1.0 - squash));
-        let bottom = floor_y - height as f32 * scale;
-        let mut shapes = vec![Shape::Ellipse {
-            cx,
-            cy: bottom - ry,
-            rx,
-            ry,
-            color,
-        }];
-        if let Some(c) = last.filter(|c| t - c.time < 0.4) {
-            shapes.push(label(c, radius));
+/// The sound of the soundtracks, aligned at their start, as WAV bytes: one soundtrack's
+/// file as it is; several summed (at the first one's rate, each mixed to mono), scaled
+/// down only as far as the sum would clip.
+pub fn soundtrack(paths: &[std::path::PathBuf]) -> anyhow::Result<Vec<u8>> {
+    use crate::audio::{resample_clip, ChannelSelect, WavSource};
+    if let [one] = paths {
+        return std::fs::read(one)
+            .with_context(|| format!("cannot read the recording {}", one.display()));
+    }
+    let mut mix: Vec<f32> = Vec::new();
+    let mut rate = 0;
+    for path in paths {
+        let mut source = WavSource::open(path, ChannelSelect::Mix)
+            .with_context(|| format!("cannot read the recording {}", path.display()))?;
+        let samples = source
+            .read_all()
+            .with_context(|| format!("cannot read the recording {}", path.display()))?;
+        if rate == 0 {
+            rate = source.sample_rate();
         }
-        animation.frames.push(shapes);
-    }
-}
-
-/// The name and strength of the contact just made, top left.
-fn label(c: &Contact, radius: f32) -> Shape {
-    Shape::Text {
-        x: radius,
-        y: radius * 2.0,
-        size: radius * 1.2,
-        text: format!("{}  {:.2}", c.pattern, c.strength),
-        color: INK,
-    }
-}
-
-/// How long a drop falls, seconds: long enough to be seen, short enough that drops of
-/// a quick rhythm do not pile up.
-const RAIN_FALL_SECONDS: f64 = 0.6;
-/// How long a splash stays, seconds.
-const RAIN_SPLASH_SECONDS: f64 = 0.25;
-
-/// A place in [0, 1) for event `id`, the same on every run (SplitMix64).
-fn place_of(id: u64) -> f64 {
-    let mut z = id.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64
-}
-
-/// The rain scene: each impulse is a drop falling as a dropped body does (distance
-/// growing with the square of time) from the top to the ground, touching it at the
-/// event's time, then a splash.
-fn rain(animation: &mut Animation, events: &[Event], frames: FrameSettings, count: usize) {
-    let (w, h) = (frames.width as f32, frames.height as f32);
-    let ground = (h * 0.85).round();
-    let top = h * 0.05;
-    let unit = (h * 0.02).max(2.0);
-    animation.fixed.push(Shape::Rect {
-        x: 0.0,
-        y: ground,
-        w,
-        h: h - ground,
-        color: "#c9c2b3",
-    });
-    let drops: Vec<(f64, f32, f32)> = events
-        .iter()
-        .filter(|e| e.kind == PatternKind::Impulse)
-        .map(|e| {
-            let x = w * (0.05 + 0.9 * place_of(e.id) as f32);
-            let size = unit * (0.5 + e.strength.clamp(0.0, 2.0) as f32);
-            (e.time, x, size)
-        })
-        .collect();
-    for k in 0..count {
-        let t = k as f64 / f64::from(frames.fps);
-        let mut shapes = Vec::new();
-        for &(land, x, size) in &drops {
-            let k_land = frames.frame_of(land);
-            if k < k_land && t >= land - RAIN_FALL_SECONDS {
-                let fallen = ((t - (land - RAIN_FALL_SECONDS)) / RAIN_FALL_SECONDS).powi(2) as f32;
-                shapes.push(Shape::Ellipse {
-                    cx: x,
-                    cy: top + (ground - size * 1.5 - top) * fallen,
-                    rx: size,
-                    ry: size * 1.5,
-                    color: HARD,
-                });
-            } else if k >= k_land && t < land + RAIN_SPLASH_SECONDS {
-                // Touching the ground at its frame, then spreading flat.
-                let spread = 1.0
-                    + 3.0
-                        * ((k - k_land) as f64 / f64::from(frames.fps) / RAIN_SPLASH_SECONDS)
-                            as f32;
-                let ry = size * 1.5 / spread;
-                shapes.push(Shape::Ellipse {
-                    cx: x,
-                    cy: ground - ry,
-                    rx: size * spread,
-                    ry,
-                    color: HARD,
-                });
-            }
+        let samples = resample_clip(&samples, source.sample_rate(), rate)
+            .with_context(|| format!("cannot resample {}", path.display()))?;
+        if mix.len() < samples.len() {
+            mix.resize(samples.len(), 0.0);
         }
-        animation.frames.push(shapes);
+        for (m, s) in mix.iter_mut().zip(&samples) {
+            *m += s;
+        }
     }
-}
-
-/// The timeline: a strip of every event (a bar as high as its strength; a held sound
-/// as long as it lasts), seconds marked, and a playhead.
-fn timeline(animation: &mut Animation, events: &[Event], frames: FrameSettings, count: usize) {
-    let (w, h) = (frames.width as f32, frames.height as f32);
-    let margin = w * 0.04;
-    let duration = animation.duration_seconds.max(1e-3);
-    let x_of = |t: f64| margin + (t / duration) as f32 * (w - 2.0 * margin);
-    let base = h * 0.7;
-    let tall = h * 0.45;
-    let text = (h * 0.035).max(8.0);
-    let fixed = &mut animation.fixed;
-    fixed.push(Shape::Rect {
-        x: margin,
-        y: base,
-        w: w - 2.0 * margin,
-        h: 1.5,
-        color: INK,
-    });
-    for s in 0..=duration.floor() as u32 {
-        let x = x_of(f64::from(s));
-        fixed.push(Shape::Rect {
-            x,
-            y: base,
-            w: 1.0,
-            h: text * 0.6,
-            color: GREY,
-        });
-        fixed.push(Shape::Text {
-            x: x + 2.0,
-            y: base + text * 1.6,
-            size: text,
-            text: format!("{s} s"),
-            color: GREY,
-        });
+    let peak = mix.iter().fold(0.0_f32, |p, s| p.max(s.abs()));
+    let gain = if peak > 1.0 { 1.0 / peak } else { 1.0 };
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: rate,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut writer = hound::WavWriter::new(&mut bytes, spec)?;
+    for s in &mix {
+        writer.write_sample((s * gain * f32::from(i16::MAX)).round() as i16)?;
     }
-    let mut names: Vec<&str> = Vec::new();
-    for e in events {
-        let i = match names.iter().position(|n| **n == *e.pattern) {
-            Some(i) => i,
-            None => {
-                names.push(&e.pattern);
-                names.len() - 1
-            }
-        };
-        let color = PALETTE[i % PALETTE.len()];
-        let bar = (e.strength.clamp(0.0, 1.5) / 1.5) as f32 * tall + 2.0;
-        let x = x_of(e.time);
-        let width = match (e.kind, e.end) {
-            (PatternKind::Continuous, Some(end)) => (x_of(end) - x).max(2.0),
-            _ => 2.0,
-        };
-        fixed.push(Shape::Rect {
-            x,
-            y: base - bar,
-            w: width,
-            h: bar,
-            color,
-        });
-        fixed.push(Shape::Text {
-            x: x + 3.0,
-            y: base - bar - text * 0.4,
-            size: text,
-            text: format!("{} {:.2}", e.pattern, e.strength),
-            color,
-        });
-    }
-    for k in 0..count {
-        let t = k as f64 / f64::from(frames.fps);
-        animation.frames.push(vec![Shape::Rect {
-            x: x_of(t) - 1.0,
-            y: h * 0.1,
-            w: 2.0,
-            h: h * 0.8,
-            color: INK,
-        }]);
-    }
+    writer.finalize()?;
+    Ok(bytes.into_inner())
 }
 
 /// Writes one self-contained page: the recording embedded as a data URL, the frames as
@@ -390,13 +264,11 @@ fn timeline(animation: &mut Animation, events: &[Event], frames: FrameSettings, 
 /// the time in the address's `#t=SECONDS`: a still, the frame alone at the top left).
 pub fn write_html(
     animation: &Animation,
-    recording: &Path,
+    sound: &[u8],
     title: &str,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let audio = std::fs::read(recording)
-        .with_context(|| format!("cannot read the recording {}", recording.display()))?;
-    let audio = base64::engine::general_purpose::STANDARD.encode(audio);
+    let audio = base64::engine::general_purpose::STANDARD.encode(sound);
     // In a <script> element, "</" would end it early; JSON allows "<\/".
     let data = serde_json::to_string(animation)?.replace("</", "<\\/");
     let title = escape_html(title);
@@ -436,6 +308,11 @@ function shape(s) {{
     ctx.fill();
   }} else if (s.shape === "rect") {{
     ctx.fillRect(s.x, s.y, s.w, s.h);
+  }} else if (s.shape === "polygon") {{
+    ctx.beginPath();
+    s.points.forEach(([x, y], i) => i === 0 ? ctx.moveTo(x, y) : ctx.lineTo(x, y));
+    ctx.closePath();
+    ctx.fill();
   }} else if (s.shape === "text") {{
     ctx.font = s.size + "px sans-serif";
     ctx.fillText(s.text, s.x, s.y);
@@ -469,16 +346,21 @@ if (still) {{
     Ok(())
 }
 
-/// Writes the animation as an MP4 video with the recording's sound, through a
-/// temporary file beside `path`: a failure (ffmpeg missing, a full disk) leaves nothing.
+/// Writes the animation as an MP4 video with `sound` (WAV bytes), through temporary
+/// files beside `path`: a failure (ffmpeg missing, a full disk) leaves nothing.
 pub fn write_video(
     animation: &Animation,
-    recording: &Path,
+    sound: &[u8],
     path: &Path,
     progress: &mut dyn FnMut(usize),
 ) -> anyhow::Result<()> {
     write_through_partial(path, |partial| {
-        video::write_mp4(animation, recording, partial, progress)
+        let wav = partial.with_extension("wav");
+        let written = std::fs::write(&wav, sound)
+            .with_context(|| format!("cannot write {}", wav.display()))
+            .and_then(|()| video::write_mp4(animation, &wav, partial, progress));
+        let _ = std::fs::remove_file(&wav);
+        written
     })
 }
 
@@ -554,23 +436,6 @@ pub fn read_events(path: &Path) -> anyhow::Result<Vec<Event>> {
     Ok(events)
 }
 
-/// Bounce styles from the events themselves (no patterns given): an impulse is a hard
-/// bounce, a held sound a slide.
-pub fn bounce_for_events(events: &[Event]) -> BounceSettings {
-    let mut styles = std::collections::BTreeMap::new();
-    for e in events {
-        let style = match e.kind {
-            PatternKind::Impulse => ContactStyle::Hard,
-            PatternKind::Continuous => ContactStyle::Slide,
-        };
-        styles.entry(e.pattern.to_string()).or_insert(style);
-    }
-    BounceSettings {
-        styles,
-        ..BounceSettings::default_for(&[])
-    }
-}
-
 /// Writes `path` through a temporary file beside it, renamed into place when whole:
 /// a failure leaves nothing behind.
 pub fn write_atomically(
@@ -630,14 +495,61 @@ mod tests {
         }
     }
 
-    fn settings(styles: &[(&str, ContactStyle)]) -> BounceSettings {
-        BounceSettings {
-            gravity: 9.81,
-            styles: styles.iter().map(|(n, s)| (n.to_string(), *s)).collect(),
-            max_squash: 0.4,
-            default_interval_seconds: 0.5,
-            state_delay_seconds: None,
-        }
+    fn names(kinds: &[(&str, PatternKind)]) -> Vec<(String, PatternKind)> {
+        kinds.iter().map(|(n, k)| (n.to_string(), *k)).collect()
+    }
+
+    #[test]
+    fn scenes_the_config_does_not_map_get_actions_from_the_kinds_of_the_patterns() {
+        use PatternKind::{Continuous, Impulse};
+        let patterns = names(&[
+            ("pew", Impulse),
+            ("chhh", Continuous),
+            ("boom", Impulse),
+            ("hup", Impulse),
+            ("hooo", Continuous),
+            ("sss", Continuous),
+        ]);
+        let a = Actions::new(&RenderSettings::default(), None, &patterns);
+        assert_eq!(a.bounce.styles["pew"], ContactStyle::Hard);
+        assert_eq!(a.bounce.styles["chhh"], ContactStyle::Slide);
+        assert_eq!(a.darts["pew"], DartsAction::Throw);
+        assert_eq!(a.darts["chhh"], DartsAction::Up);
+        assert_eq!(a.darts["hooo"], DartsAction::Down);
+        assert!(
+            !a.darts.contains_key("sss"),
+            "a third held sound does nothing"
+        );
+        assert_eq!(a.laser["pew"], LaserAction::ShootLow);
+        assert_eq!(a.laser["boom"], LaserAction::ShootHigh);
+        assert_eq!(a.laser["hup"], LaserAction::Jump);
+        assert_eq!(a.laser["sss"], LaserAction::Slide);
+        assert_eq!(a.rain.len(), 3);
+        // A mapping in the config is taken as it is: what it leaves out does nothing.
+        let render = RenderSettings {
+            darts: Some([("boom".to_string(), DartsAction::Throw)].into()),
+            rain: Some(vec!["hup".into()]),
+            ..RenderSettings::default()
+        };
+        let a = Actions::new(&render, None, &patterns);
+        assert_eq!(a.darts.len(), 1);
+        assert_eq!(a.rain, ["hup".to_string()].into());
+        assert_eq!(a.laser.len(), 6, "laser still from the kinds");
+    }
+
+    #[test]
+    fn patterns_of_events_are_in_the_order_first_heard() {
+        let mut held = hit(2, "hooo", 0.2, 1.0);
+        held.kind = PatternKind::Continuous;
+        let tracks = vec![
+            vec![hit(0, "pew", 0.5, 1.0), hit(1, "boom", 0.7, 1.0)],
+            vec![held, hit(0, "pew", 0.1, 1.0)],
+        ];
+        let names: Vec<String> = patterns_of_events(&tracks)
+            .into_iter()
+            .map(|p| p.0)
+            .collect();
+        assert_eq!(names, ["pew", "boom", "hooo"]);
     }
 
     const FRAMES: FrameSettings = FrameSettings {
@@ -646,129 +558,22 @@ mod tests {
         height: 360,
     };
 
-    fn ball_of(frame: &[Shape]) -> (f32, f32, f32, f32) {
-        match frame[0] {
-            Shape::Ellipse { cx, cy, rx, ry, .. } => (cx, cy, rx, ry),
-            _ => panic!("the ball is drawn first"),
-        }
-    }
-
-    #[test]
-    fn the_ball_is_on_the_floor_at_each_hit_frame_and_at_the_apex_half_way() {
-        let events = [
-            hit(0, "tick", 0.5, 1.0),
-            hit(1, "tick", 1.0, 1.0),
-            hit(2, "tick", 1.73, 1.0),
-        ];
-        let a = animate(
-            Scene::Ball,
-            &events,
-            &settings(&[("tick", ContactStyle::Hard)]),
-            FRAMES,
-            2.0,
-        );
-        let g = a.ball.unwrap();
-        assert_eq!(a.frames.len(), 101);
-        for e in &events {
-            let (_, cy, _, ry) = ball_of(&a.frames[FRAMES.frame_of(e.time)]);
-            assert_eq!(cy + ry, g.floor_y, "at {}", e.time);
-        }
-        // Half-way between 1.0 and 1.73 (frame 68.25 → the nearest frame's height).
-        let apex = 9.81 * 0.73 * 0.73 / 8.0;
-        let k = FRAMES.frame_of(1.365);
-        let t = k as f64 / 50.0;
-        let dt = t - 1.0;
-        let height = 9.81 * 0.73 / 2.0 * dt - 9.81 * dt * dt / 2.0;
-        let (_, cy, _, ry) = ball_of(&a.frames[k]);
-        assert!((g.floor_y - (cy + ry) - height as f32 * g.scale).abs() < 0.01);
-        assert!(height <= apex && apex - height < 0.01);
-        // The highest flight fills the room above the floor.
-        assert!(g.scale * apex as f32 > 150.0);
-    }
-
-    #[test]
-    fn a_soft_bounce_squashes_the_ball_by_its_strength_keeping_its_area() {
-        let events = [hit(0, "pop", 0.5, 0.5), hit(1, "pop", 1.0, 1.0)];
-        let a = animate(
-            Scene::Ball,
-            &events,
-            &settings(&[("pop", ContactStyle::Soft)]),
-            FRAMES,
-            1.5,
-        );
-        let r = a.ball.unwrap().radius;
-        for (e, squash) in events.iter().zip([0.2_f32, 0.4]) {
-            let (_, _, rx, ry) = ball_of(&a.frames[FRAMES.frame_of(e.time)]);
-            assert!((ry - r * (1.0 - squash)).abs() < 1e-3);
-            assert!((rx * ry - r * r).abs() < 1e-2);
-        }
-        let (_, _, rx, ry) = ball_of(&a.frames[FRAMES.frame_of(0.75)]);
-        assert_eq!((rx, ry), (r, r), "round in the air");
-    }
-
-    #[test]
-    fn a_held_sound_slides_the_ball_along_the_floor_for_exactly_its_span() {
-        let mut held = hit(0, "chhh", 0.5, 1.0);
-        held.kind = PatternKind::Continuous;
-        held.end = Some(1.5);
-        let events = [held, hit(1, "tick", 2.0, 1.0)];
-        let a = animate(
-            Scene::Ball,
-            &events,
-            &settings(&[("chhh", ContactStyle::Slide), ("tick", ContactStyle::Hard)]),
-            FRAMES,
-            2.5,
-        );
-        let x = |t: f64| ball_of(&a.frames[FRAMES.frame_of(t)]).0;
-        assert_eq!(x(0.2), x(0.5));
-        assert!(x(1.0) > x(0.5) && x(1.5) > x(1.0));
-        assert_eq!(x(1.5), x(2.4), "it stops when the sound ends");
-        let floor = a.ball.unwrap().floor_y;
-        let (_, cy, _, ry) = ball_of(&a.frames[FRAMES.frame_of(1.0)]);
-        assert_eq!(cy + ry, floor, "on the floor while it slides");
-    }
-
-    #[test]
-    fn each_drop_falls_faster_and_faster_and_touches_the_ground_at_its_event() {
-        let events = [hit(0, "knock", 1.0, 0.5), hit(1, "knock", 1.2, 1.5)];
-        let a = animate(Scene::Rain, &events, &settings(&[]), FRAMES, 2.0);
-        let ground = (360.0_f32 * 0.85).round();
-        let drop = |t: f64, i: usize| match &a.frames[FRAMES.frame_of(t)][i] {
-            Shape::Ellipse { cx, cy, rx, ry, .. } => (*cx, *cy, *rx, *ry),
-            _ => panic!("a drop"),
-        };
-        assert!(
-            a.frames[FRAMES.frame_of(0.3)].is_empty(),
-            "nothing before the fall"
-        );
-        // The first drop: on the ground at its frame, having fallen more in its second
-        // half than in its first.
-        let (x, cy, _, ry) = drop(1.0, 0);
-        assert_eq!(cy + ry, ground);
-        let (x0, y0, _, _) = drop(0.4, 0);
-        let (_, y1, _, _) = drop(0.7, 0);
-        let (_, y2, _, _) = drop(0.98, 0);
-        assert_eq!(x0, x, "it falls straight");
-        assert!(y1 - y0 < y2 - y1);
-        // The stronger drop is larger, elsewhere, and lands at 1.2 s.
-        let (x1, cy1, rx1, ry1) = drop(1.2, 1);
-        assert_eq!(cy1 + ry1, ground);
-        assert!(rx1 > drop(1.0, 0).2 && x1 != x);
-        // The same places on every run.
-        let again = animate(Scene::Rain, &events, &settings(&[]), FRAMES, 2.0);
-        assert_eq!(again.frames, a.frames);
-        assert!(a.frames[FRAMES.frame_of(1.9)].is_empty(), "splashes gone");
-    }
-
     #[test]
     fn the_page_embeds_the_sound_and_the_frames_and_cannot_be_closed_by_a_label() {
         let dir = std::env::temp_dir();
         let wav = dir.join(format!("onomato-render-{}.wav", std::process::id()));
         std::fs::write(&wav, b"RIFF-not-really").unwrap();
         let events = [hit(0, "</script><b>", 0.5, 1.0)];
-        let a = animate(Scene::Timeline, &events, &settings(&[]), FRAMES, 1.0);
+        let actions = Actions::new(&RenderSettings::default(), None, &[]);
+        let a = animate(Scene::Timeline, &[events.to_vec()], &actions, FRAMES, 1.0);
         let mut page = Vec::new();
-        write_html(&a, &wav, "a <title>", &mut page).unwrap();
+        write_html(
+            &a,
+            &soundtrack(std::slice::from_ref(&wav)).unwrap(),
+            "a <title>",
+            &mut page,
+        )
+        .unwrap();
         std::fs::remove_file(&wav).unwrap();
         let page = String::from_utf8(page).unwrap();
         assert!(page.contains("data:audio/wav;base64,UklGRi1ub3QtcmVhbGx5"));
@@ -782,5 +587,41 @@ mod tests {
         let json = json.split("</script>").next().unwrap();
         let parsed: serde_json::Value = serde_json::from_str(json).unwrap();
         assert_eq!(parsed["frames"].as_array().unwrap().len(), 51);
+    }
+
+    #[test]
+    fn several_soundtracks_are_summed_at_the_first_ones_rate_and_kept_from_clipping() {
+        let dir = std::env::temp_dir();
+        let path = |n: &str| dir.join(format!("onomato-mix-{n}-{}.wav", std::process::id()));
+        let write = |p: &std::path::Path, rate: u32, samples: &[f32]| {
+            let spec = hound::WavSpec {
+                channels: 1,
+                sample_rate: rate,
+                bits_per_sample: 32,
+                sample_format: hound::SampleFormat::Float,
+            };
+            let mut w = hound::WavWriter::create(p, spec).unwrap();
+            samples.iter().for_each(|s| w.write_sample(*s).unwrap());
+            w.finalize().unwrap();
+        };
+        let (a, b) = (path("a"), path("b"));
+        write(&a, 8000, &[0.25; 8000]);
+        write(&b, 8000, &[0.5; 16000]);
+        let mix = soundtrack(&[a.clone(), b.clone()]).unwrap();
+        let mut reader = hound::WavReader::new(std::io::Cursor::new(mix)).unwrap();
+        assert_eq!(reader.spec().sample_rate, 8000);
+        let samples: Vec<i16> = reader.samples::<i16>().map(Result::unwrap).collect();
+        assert_eq!(samples.len(), 16000, "as long as the longest");
+        let full = f32::from(i16::MAX);
+        assert!((f32::from(samples[4000]) / full - 0.75).abs() < 1e-3);
+        assert!((f32::from(samples[12000]) / full - 0.5).abs() < 1e-3);
+        // A sum over full scale is scaled down, not clipped.
+        write(&b, 8000, &[0.9; 8000]);
+        let mix = soundtrack(&[a.clone(), b.clone()]).unwrap();
+        let mut reader = hound::WavReader::new(std::io::Cursor::new(mix)).unwrap();
+        let first = reader.samples::<i16>().next().unwrap().unwrap();
+        assert_eq!(first, i16::MAX);
+        std::fs::remove_file(a).unwrap();
+        std::fs::remove_file(b).unwrap();
     }
 }

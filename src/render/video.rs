@@ -1,6 +1,6 @@
 //! MP4 output: each frame's shapes rasterised in Rust (tiny-skia; labels with
 //! ab_glyph in DejaVu Sans) and piped as raw RGBA to `ffmpeg`, which encodes H.264 and
-//! muxes the recording's sound in from frame 0.
+//! muxes the soundtrack in from frame 0.
 //!
 //! Runs on the main thread.
 
@@ -100,6 +100,27 @@ impl Rasteriser {
                 text,
                 color,
             } => self.text(*x, *y, *size, text, color),
+            Shape::Polygon { points, color } => {
+                paint.set_color(parse_color(color));
+                let mut path = PathBuilder::new();
+                for (i, &[x, y]) in points.iter().enumerate() {
+                    if i == 0 {
+                        path.move_to(x, y);
+                    } else {
+                        path.line_to(x, y);
+                    }
+                }
+                path.close();
+                if let Some(path) = path.finish() {
+                    self.pixmap.fill_path(
+                        &path,
+                        &paint,
+                        FillRule::Winding,
+                        Transform::identity(),
+                        None,
+                    );
+                }
+            }
         }
     }
 
@@ -159,11 +180,11 @@ fn parse_color(color: &str) -> tiny_skia::Color {
     tiny_skia::Color::from_rgba8(r, g, b, 255)
 }
 
-/// Encodes the animation with the recording's sound into `partial` (an MP4), through
+/// Encodes the animation with the sound of the WAV file `sound` into `partial` (an MP4), through
 /// `ffmpeg`. `progress` is told each frame written.
 pub fn write_mp4(
     animation: &Animation,
-    recording: &Path,
+    sound: &Path,
     partial: &Path,
     progress: &mut dyn FnMut(usize),
 ) -> anyhow::Result<()> {
@@ -175,7 +196,7 @@ pub fn write_mp4(
         .args(["-f", "rawvideo", "-pix_fmt", "rgba", "-s", &size, "-framerate", &fps])
         .args(["-i", "-"])
         .arg("-i")
-        .arg(recording)
+        .arg(sound)
         .args(["-map", "0:v", "-map", "1:a"])
         .args(["-c:v", "libx264", "-preset", "veryfast", "-crf", "18"])
         .args(["-pix_fmt", "yuv420p", "-c:a", "aac", "-b:a", "192k"])
