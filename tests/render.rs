@@ -463,3 +463,251 @@ fn without_ffmpeg_an_mp4_is_refused_by_name_and_nothing_is_left() {
         .collect();
     assert_eq!(left, vec![std::ffi::OsString::from("empty-path")]);
 }
+
+/// The placed onsets of one label in a soundtrack of the duel example (its truth CSV).
+fn duel_times(track: &str, label: &str) -> Vec<f64> {
+    fs::read_to_string(root().join(format!("examples/duel/{track}.truth.csv")))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(1) == Some(label))
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect()
+}
+
+/// Root mean square of the video's sound from `from` to `to` seconds (ffmpeg decodes it).
+fn sound_rms(video: &Path, from: f64, to: f64) -> f64 {
+    let out = Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(video)
+        .args(["-ss", &from.to_string(), "-t", &(to - from).to_string()])
+        .args(["-vn", "-ac", "1", "-f", "f32le", "-"])
+        .output()
+        .expect("ffmpeg");
+    let samples: Vec<f32> = out
+        .stdout
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    assert!(!samples.is_empty(), "no sound from {from} to {to}");
+    (samples.iter().map(|s| f64::from(*s).powi(2)).sum::<f64>() / samples.len() as f64).sqrt()
+}
+
+#[test]
+fn the_duel_video_shoots_with_one_soundtrack_and_moves_the_runner_with_the_other() {
+    let dir = common::temp_dir("render-duel");
+    let video = dir.join("duel.mp4");
+    let out = onomato(&[
+        "render",
+        "examples/duel/shots.wav",
+        "--track",
+        "examples/duel/moves.wav",
+        "-c",
+        "config/duel.toml",
+        "--fps",
+        "50",
+        "--size",
+        "640x360",
+        "-o",
+        &video.to_string_lossy(),
+    ]);
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    assert!(log.contains("laser scene, 14 events"), "{log}");
+    // Both soundtracks are heard: each one's sound where only it sounds, well above
+    // where neither does.
+    let quiet = sound_rms(&video, 7.3, 7.9);
+    let whoo = sound_rms(&video, 1.75, 2.0);
+    let pew = sound_rms(&video, 2.6, 2.75);
+    assert!(
+        whoo > 10.0 * quiet && pew > 10.0 * quiet,
+        "{whoo} {pew} {quiet}"
+    );
+    // The colours of the two soundtracks; the encoder blurs them at edges (within 40).
+    const RED_TRACK: [u8; 3] = RED;
+    let ground = (360.0_f64 * 0.8).round();
+    let cannon = 640.0 * 0.9;
+    let frame = |t: f64| video_frame(&video, (t * 50.0).round() as usize, &dir);
+    for t in duel_times("shots", "pew") {
+        // Fired low at its frame: a blue beam at the cannon's mouth, near the ground.
+        let (top, bottom, left, _) =
+            ball_box_within(&frame(t), BLUE, 40).unwrap_or_else(|| panic!("no shot at {t}"));
+        assert!(
+            (left as f64 - cannon).abs() <= 2.0,
+            "shot at x {left} at {t}"
+        );
+        assert!(
+            ground - (bottom as f64) < 20.0 && bottom > top,
+            "low: rows {top}-{bottom}"
+        );
+    }
+    for t in duel_times("moves", "hup") {
+        // Up in the air a quarter of a second after the jump begins, in the runner's
+        // soundtrack's colour.
+        let (_, bottom, _, _) = ball_box_within(&frame(t + 0.24), RED_TRACK, 40)
+            .unwrap_or_else(|| panic!("no runner at {t}"));
+        assert!(
+            ground - (bottom as f64 + 1.0) > 50.0,
+            "jump at {t}: feet at {bottom}"
+        );
+    }
+    for t in duel_times("moves", "whoo") {
+        // Flat on the ground while the held sound lasts.
+        let (top, bottom, left, right) = ball_box_within(&frame(t + 0.2), RED_TRACK, 40)
+            .unwrap_or_else(|| panic!("no runner at {t}"));
+        assert!(
+            right - left > 2 * (bottom - top),
+            "slide at {t}: {}x{}",
+            right - left,
+            bottom - top
+        );
+    }
+}
+
+#[test]
+fn the_rain_and_timeline_pages_draw_each_event_at_its_time() {
+    let dir = common::temp_dir("render-pages");
+    let (rain, strip) = (dir.join("rain.html"), dir.join("timeline.html"));
+    for (scene, page) in [("rain", &rain), ("timeline", &strip)] {
+        let out = onomato(&[
+            "render",
+            "examples/beat.wav",
+            "-c",
+            "config/onomato.toml",
+            "--scene",
+            scene,
+            "--fps",
+            "50",
+            "--size",
+            "640x360",
+            "-o",
+            &page.to_string_lossy(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let hard = example_hard_contacts();
+    // Rain: each of the first two drops touches the ground (its full colour within 3
+    // rows above it: the lowest row of an ellipse is only partly covered) at its
+    // event's frame, and no drop does 0.15 s before.
+    let ground = (360.0_f64 * 0.85).round() as usize;
+    let touching = |image: &(usize, usize, Vec<u8>)| {
+        let (w, _, px) = image;
+        (ground - 3..ground).any(|y| {
+            (0..*w).any(|x| {
+                let p = &px[(y * w + x) * 3..][..3];
+                p.iter().zip(BLUE).all(|(a, b)| a.abs_diff(b) <= 12)
+            })
+        })
+    };
+    for c in hard.iter().take(2) {
+        let t = c["time"].as_f64().unwrap();
+        assert!(
+            touching(&still(&rain, t, (640, 360), &dir)),
+            "no drop lands at {t}"
+        );
+        let before = still(&rain, t - 0.15, (640, 360), &dir);
+        assert!(
+            ball_box(&before, BLUE).is_some(),
+            "no drop falling before {t}"
+        );
+        assert!(!touching(&before), "a drop on the ground before {t}");
+    }
+    // Timeline: the playhead (the only ink this high) at the time's place, and the
+    // first event's bar at its own.
+    let margin = 640.0 * 0.04;
+    let x_of = |t: f64| margin + t / 10.0 * (640.0 - 2.0 * margin);
+    for t in [2.0, 7.5] {
+        let (w, _, px) = still(&strip, t, (640, 360), &dir);
+        let row = (360.0 * 0.12) as usize;
+        let ink: Vec<usize> = (0..w)
+            .filter(|x| px[(row * w + x) * 3..][..3].iter().all(|c| *c < 0x50))
+            .collect();
+        assert!(!ink.is_empty(), "no playhead at {t}");
+        let centre = (ink[0] + ink[ink.len() - 1]) as f64 / 2.0;
+        assert!(
+            (centre - x_of(t)).abs() <= 2.0,
+            "playhead at {centre}, expected {}",
+            x_of(t)
+        );
+    }
+    let first = hard[0]["time"].as_f64().unwrap();
+    let image = still(&strip, 0.0, (640, 360), &dir);
+    let (_, _, left, _) = ball_box(&image, BLUE).expect("the first pattern's bars");
+    assert!(
+        (left as f64 - x_of(first)).abs() <= 2.0,
+        "first bar at {left}"
+    );
+}
+
+#[test]
+fn render_settings_that_cannot_be_done_are_refused_by_name() {
+    let dir = common::temp_dir("render-settings");
+    let patterns = root().join("examples/patterns");
+    let config = dir.join("darts.toml");
+    fs::write(
+        &config,
+        format!(
+            "[[pattern]]\nname = \"hoo\"\nkind = \"continuous\"\ntakes = [\"{}/hoo.wav\"]\n\n[render]\ndarts = {{ hoo = \"throw\" }}\n",
+            patterns.display()
+        ),
+    )
+    .unwrap();
+    let out_page = dir.join("x.html");
+    let run = |args: &[&str]| {
+        let out = onomato(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let page = out_page.to_string_lossy();
+    let err = run(&[
+        "render",
+        "examples/beat.wav",
+        "-c",
+        &config.to_string_lossy(),
+        "-o",
+        &page,
+    ]);
+    assert!(
+        err.contains("darts.toml")
+            && err.contains("[render]")
+            && err.contains("'hoo' cannot throw"),
+        "{err}"
+    );
+    let err = run(&[
+        "render",
+        "examples/duel/shots.wav",
+        "--track",
+        "examples/duel/moves.wav",
+        "--track",
+        "examples/beat.wav",
+        "-c",
+        "config/duel.toml",
+        "-o",
+        &page,
+    ]);
+    assert!(
+        err.contains("duel.toml")
+            && err.contains("2 [[render.track]]")
+            && err.contains("3 soundtracks"),
+        "{err}"
+    );
+    let err = run(&[
+        "render",
+        "examples/duel/shots.wav",
+        "--track",
+        "examples/duel/moves.wav",
+        "--events",
+        "x.json",
+        "-o",
+        &page,
+    ]);
+    assert!(
+        err.contains("--events given 1 times for 2 soundtracks"),
+        "{err}"
+    );
+    assert!(!out_page.exists());
+}
