@@ -1119,6 +1119,21 @@ impl DetectorSettings {
     }
 }
 
+/// The pattern `key` of section `item` names, or an error saying it is not defined.
+fn find_pattern<'a>(
+    patterns: &'a [PatternSpec],
+    item: &str,
+    key: &str,
+    name: &str,
+) -> Result<&'a PatternSpec, ConfigError> {
+    patterns.iter().find(|p| p.name == name).ok_or_else(|| {
+        invalid(
+            item,
+            format!("{key} names pattern '{name}', which is not defined"),
+        )
+    })
+}
+
 impl RawBounce {
     fn validate(self, patterns: &[PatternSpec], item: &str) -> Result<BounceSettings, ConfigError> {
         let gravity = self.gravity.unwrap_or(DEFAULT_GRAVITY);
@@ -1161,12 +1176,7 @@ impl RawBounce {
             ),
         ] {
             for name in names {
-                let Some(p) = patterns.iter().find(|p| p.name == name) else {
-                    return Err(invalid(
-                        item,
-                        format!("{key} names pattern '{name}', which is not defined"),
-                    ));
-                };
+                let p = find_pattern(patterns, item, key, &name)?;
                 if p.kind != kind {
                     return Err(invalid(
                         item,
@@ -1197,19 +1207,6 @@ impl RawBounce {
 
 impl RawRender {
     fn validate(self, patterns: &[PatternSpec], item: &str) -> Result<RenderSettings, ConfigError> {
-        fn pattern<'a>(
-            patterns: &'a [PatternSpec],
-            item: &str,
-            key: &str,
-            name: &str,
-        ) -> Result<&'a PatternSpec, ConfigError> {
-            patterns.iter().find(|p| p.name == name).ok_or_else(|| {
-                invalid(
-                    item,
-                    format!("{key} names pattern '{name}', which is not defined"),
-                )
-            })
-        }
         fn check_actions<A: SceneAction>(
             key: &str,
             actions: &Option<BTreeMap<String, A>>,
@@ -1217,7 +1214,7 @@ impl RawRender {
             item: &str,
         ) -> Result<(), ConfigError> {
             for (name, action) in actions.iter().flatten() {
-                let p = pattern(patterns, item, key, name)?;
+                let p = find_pattern(patterns, item, key, name)?;
                 if p.kind != action.kind() {
                     return Err(invalid(
                         item,
@@ -1235,7 +1232,7 @@ impl RawRender {
         check_actions("darts", &self.darts, patterns, item)?;
         check_actions("laser", &self.laser, patterns, item)?;
         for name in self.rain.iter().flatten() {
-            if pattern(patterns, item, "rain", name)?.kind != PatternKind::Impulse {
+            if find_pattern(patterns, item, "rain", name)?.kind != PatternKind::Impulse {
                 return Err(invalid(
                     item,
                     format!("rain: '{name}' cannot drop a drop: drops are made by impulse patterns, and '{name}' is continuous"),
@@ -1252,7 +1249,7 @@ impl RawRender {
                 ));
             }
             for name in &t.patterns {
-                pattern(patterns, item, &key, name)?;
+                find_pattern(patterns, item, &key, name)?;
             }
             tracks.push(t.patterns);
         }

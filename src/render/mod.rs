@@ -476,12 +476,14 @@ fn escape_html(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// Events for the unit tests of the scenes and the writers.
 #[cfg(test)]
-mod tests {
-    use super::*;
+mod test_events {
+    use crate::config::PatternKind;
+    use crate::detect::Event;
     use std::sync::Arc;
 
-    fn hit(id: u64, pattern: &str, time: f64, strength: f64) -> Event {
+    pub(super) fn hit(id: u64, pattern: &str, time: f64, strength: f64) -> Event {
         Event {
             id,
             pattern: Arc::from(pattern),
@@ -494,6 +496,20 @@ mod tests {
             pitch: None,
         }
     }
+
+    pub(super) fn held(id: u64, pattern: &str, time: f64, end: f64) -> Event {
+        Event {
+            kind: PatternKind::Continuous,
+            end: Some(end),
+            ..hit(id, pattern, time, 1.0)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_events::hit;
+    use super::*;
 
     fn names(kinds: &[(&str, PatternKind)]) -> Vec<(String, PatternKind)> {
         kinds.iter().map(|(n, k)| (n.to_string(), *k)).collect()

@@ -25,6 +25,17 @@ pub fn track_color(i: usize) -> &'static str {
     PALETTE[i % PALETTE.len()]
 }
 
+/// The ground from row `y` to the bottom of a `w` × `h` frame.
+fn ground_below(y: f32, w: f32, h: f32) -> Shape {
+    Shape::Rect {
+        x: 0.0,
+        y,
+        w,
+        h: h - y,
+        color: "#c9c2b3",
+    }
+}
+
 /// Time of frame `k`.
 fn time_of(frames: FrameSettings, k: usize) -> f64 {
     k as f64 / f64::from(frames.fps)
@@ -161,13 +172,7 @@ pub(super) fn rain(
     let ground = (h * 0.85).round();
     let top = h * 0.05;
     let unit = (h * 0.02).max(2.0);
-    animation.fixed.push(Shape::Rect {
-        x: 0.0,
-        y: ground,
-        w,
-        h: h - ground,
-        color: "#c9c2b3",
-    });
+    animation.fixed.push(ground_below(ground, w, h));
     let drops: Vec<(f64, f32, f32, &'static str)> = tracks
         .iter()
         .enumerate()
@@ -460,13 +465,7 @@ pub(super) fn laser(
     let (low, high) = (ground - h * 0.035, ground - h * 0.13);
     let beam = (w * 0.06, (h * 0.008).max(2.0));
     let shot_speed = f64::from(cannon_x - runner_x) / SHOT_SECONDS;
-    animation.fixed.push(Shape::Rect {
-        x: 0.0,
-        y: ground,
-        w,
-        h: h - ground,
-        color: "#c9c2b3",
-    });
+    animation.fixed.push(ground_below(ground, w, h));
     animation.fixed.push(Shape::Rect {
         x: cannon_x,
         y: high - h * 0.04,
@@ -567,32 +566,10 @@ pub(super) fn laser(
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_events::{held, hit};
     use super::super::{animate, Scene};
     use super::*;
     use crate::config::{BounceSettings, RenderSettings};
-    use std::sync::Arc;
-
-    fn hit(id: u64, pattern: &str, time: f64, strength: f64) -> Event {
-        Event {
-            id,
-            pattern: Arc::from(pattern),
-            kind: PatternKind::Impulse,
-            time,
-            end: None,
-            strength,
-            score: 1.0,
-            emitted_at: time,
-            pitch: None,
-        }
-    }
-
-    fn held(id: u64, pattern: &str, time: f64, end: f64) -> Event {
-        Event {
-            kind: PatternKind::Continuous,
-            end: Some(end),
-            ..hit(id, pattern, time, 1.0)
-        }
-    }
 
     /// Actions from these patterns' kinds, the ball's styles as given.
     fn actions(patterns: &[(&str, PatternKind)], styles: &[(&str, ContactStyle)]) -> Actions {
