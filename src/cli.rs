@@ -152,6 +152,11 @@ pub struct ListenArgs {
     /// Run the live bounce solver (with the config's bounce settings, or defaults).
     #[arg(long)]
     pub bounce: bool,
+    /// Serve a live preview page (the bounce ball, each sound as it fires, the input
+    /// level and counters) at http://ADDR/ (default 127.0.0.1:8765; overrides the
+    /// config's [preview]).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = config::DEFAULT_PREVIEW_ADDRESS)]
+    pub preview: Option<String>,
     /// How each event is printed on stdout as it is sent.
     #[arg(long, value_enum, default_value_t = PrintChoice::Auto)]
     pub print: PrintChoice,
@@ -192,6 +197,11 @@ impl ListenArgs {
         }
         if self.bounce && config.bounce.is_none() {
             config.bounce = Some(config.bounce_or_default());
+        }
+        if let Some(address) = &self.preview {
+            let address = config::parse_preview_address(address)
+                .map_err(|m| anyhow::anyhow!("--preview: {m}"))?;
+            config.preview = Some(config::PreviewSettings { address });
         }
         Ok(config)
     }

@@ -198,6 +198,13 @@ struct RawConfig {
     osc: Option<RawOsc>,
     midi: Option<RawMidi>,
     render: Option<RawRender>,
+    preview: Option<RawPreview>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPreview {
+    address: Option<String>,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -566,6 +573,25 @@ pub struct Config {
     /// `None`: no MIDI.
     pub midi: Option<MidiSettings>,
     pub render: RenderSettings,
+    /// `None`: no preview page.
+    pub preview: Option<PreviewSettings>,
+}
+
+/// The live preview page (`listen --preview`), validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreviewSettings {
+    /// Where its HTTP server listens.
+    pub address: std::net::SocketAddr,
+}
+
+/// Loopback only unless the user names another address.
+pub const DEFAULT_PREVIEW_ADDRESS: &str = "127.0.0.1:8765";
+
+/// A preview address: an IP address and a port, such as `127.0.0.1:8765`.
+pub fn parse_preview_address(text: &str) -> Result<std::net::SocketAddr, String> {
+    text.trim().parse().map_err(|_| {
+        format!("address must be an IP address and a port, such as '{DEFAULT_PREVIEW_ADDRESS}', found '{text}'")
+    })
 }
 
 impl Config {
@@ -797,6 +823,15 @@ impl RawConfig {
             None => RenderSettings::default(),
             Some(r) => r.validate(&patterns, &format!("{origin}, [render]"))?,
         };
+        let preview = match self.preview {
+            None => None,
+            Some(p) => Some(PreviewSettings {
+                address: parse_preview_address(
+                    p.address.as_deref().unwrap_or(DEFAULT_PREVIEW_ADDRESS),
+                )
+                .map_err(|m| invalid(&format!("{origin}, [preview]"), m))?,
+            }),
+        };
         Ok(Config {
             detector,
             patterns,
@@ -805,6 +840,7 @@ impl RawConfig {
             osc,
             midi,
             render,
+            preview,
         })
     }
 }

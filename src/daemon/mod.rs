@@ -21,6 +21,7 @@ use crate::audio::ChannelSelect;
 use crate::config::Config;
 use crate::detect::{Detector, Event};
 use crate::input;
+use crate::output::preview::PreviewServer;
 use crate::output::{self, OutputMessage, OutputReport, OutputSettings, PrintMode};
 use crate::pattern::{self, Pattern};
 pub use crate::status::Status;
@@ -478,12 +479,18 @@ pub fn listen(
     let mut running_delay = detector.decision_delay_bound();
     let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
     let origin = SystemTime::now();
+    // Bound before anything runs, so that a port in use is an error at start.
+    let preview = match &config.preview {
+        Some(p) => Some(PreviewServer::start(p.address)?),
+        None => None,
+    };
     let output_thread = {
         let settings = OutputSettings::from_config(&config, running_delay, options.print);
         let status = status.clone();
+        let hub = preview.as_ref().map(PreviewServer::hub);
         std::thread::Builder::new()
             .name("onomato-output".into())
-            .spawn(move || output::run(settings, out_rx, status, origin))
+            .spawn(move || output::run(settings, out_rx, status, origin, hub))
             .context("cannot start the output thread")?
     };
 
@@ -543,6 +550,9 @@ pub fn listen(
                         if new.input != config.input && options.input_file.is_none() {
                             tracing::warn!("[input] changed: restart the daemon to use the new input settings; keeping the running capture");
                         }
+                        if new.preview != config.preview {
+                            tracing::warn!("[preview] changed: restart the daemon to serve the preview elsewhere; keeping the running one");
+                        }
                         let detector = reload.detector.map(|(detector, patterns)| {
                             running_patterns = patterns;
                             running_delay = detector.decision_delay_bound();
@@ -557,6 +567,7 @@ pub fn listen(
                         tracing::info!(patterns = new.patterns.len(), %changed, "configuration reloaded");
                         config = Config {
                             input: config.input.clone(),
+                            preview: config.preview.clone(),
                             ..new
                         };
                     }
@@ -622,6 +633,8 @@ pub fn listen(
     drop(command_tx);
     // The detector thread sent Stop after its last event.
     let output = output_thread.join().unwrap_or_default();
+    // The preview's streams end after the last event was published.
+    drop(preview);
     if let Some(c) = microphone.and_then(|m| m.capture) {
         release_capture(c);
     }
@@ -652,6 +665,7 @@ pub fn listen(
         midi_ports_lost = report.output.midi.ports_lost,
         midi_server_xruns = report.output.midi.server_xruns,
         printed_lines_dropped = report.output.print_dropped,
+        preview_streams_closed = report.output.preview_closed,
         bad_samples = status.bad_samples(),
         "stopped"
     );

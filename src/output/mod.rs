@@ -10,6 +10,7 @@
 
 pub mod midi;
 pub mod osc;
+pub mod preview;
 pub mod print;
 
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
@@ -18,10 +19,11 @@ use std::time::{Duration, Instant, SystemTime};
 
 use crate::config::{BounceSettings, Config, MidiSettings, OscSettings, PatternKind};
 use crate::detect::Event;
-use crate::live_bounce::LiveBounce;
+use crate::live_bounce::{BounceState, LiveBounce, LiveHit};
 use crate::status::Status;
 use midi::{MidiSink, NoteMapping};
 use osc::OscSink;
+use preview::PreviewHub;
 use print::Printer;
 
 /// Capacity of the channel from the detector thread.
@@ -50,7 +52,16 @@ pub struct OutputSettings {
     /// The detector's longest decision delay: the bounce states' default delay.
     pub decision_delay: f64,
     pub print: PrintMode,
+    /// The patterns (for the preview page's `hello`).
+    pub patterns: Vec<(String, PatternKind)>,
+    /// Draw the bounce states for the preview page (at the OSC state rate, or 60 Hz).
+    pub preview: bool,
 }
+
+/// Bounce states drawn per second for the preview when OSC does not set a rate.
+const PREVIEW_STATE_RATE: f64 = 60.0;
+/// Status messages to the preview page per second.
+const PREVIEW_STATUS_PERIOD: Duration = Duration::from_millis(100);
 
 impl OutputSettings {
     /// The output thread's settings from a config; `decision_delay`: the detector's
@@ -63,6 +74,7 @@ impl OutputSettings {
                 .as_ref()
                 .map(|m| (m.clone(), midi::note_mappings(&config.patterns, m))),
             bounce: (config.bounce.is_some()
+                || config.preview.is_some()
                 || config
                     .osc
                     .as_ref()
@@ -70,6 +82,12 @@ impl OutputSettings {
             .then(|| config.bounce_or_default()),
             decision_delay,
             print,
+            patterns: config
+                .patterns
+                .iter()
+                .map(|p| (p.name.clone(), p.kind))
+                .collect(),
+            preview: config.preview.is_some(),
         }
     }
 }
@@ -96,6 +114,8 @@ pub struct OutputReport {
     pub late_bounce_hits: u64,
     /// Printed lines dropped because stdout was not read fast enough.
     pub print_dropped: u64,
+    /// Preview streams closed because their browser stopped reading.
+    pub preview_closed: u64,
 }
 
 struct Sinks {
@@ -107,18 +127,25 @@ struct Sinks {
     bounce: Option<LiveBounce>,
     state_delay: f64,
     heartbeat: Option<Duration>,
-    /// Seconds between two drawn bounce states; `None`: no states are sent.
+    /// Seconds between two drawn bounce states; `None`: no states are drawn.
     state_period: Option<f64>,
+    /// Drawn states go to OSC (`bounce_state_rate` is set).
+    osc_states: bool,
 }
 
 fn state_rate(s: &OutputSettings) -> Option<f64> {
     s.osc.as_ref().and_then(|o| o.bounce_state_rate)
 }
 
+/// The rate states are drawn at: OSC's, else the preview's; `None`: no states.
+fn drawn_state_rate(s: &OutputSettings) -> Option<f64> {
+    state_rate(s).or(s.preview.then_some(PREVIEW_STATE_RATE))
+}
+
 fn new_bounce(s: &OutputSettings) -> Option<LiveBounce> {
     s.bounce
         .as_ref()
-        .map(|b| LiveBounce::new(b, state_rate(s).unwrap_or(60.0)))
+        .map(|b| LiveBounce::new(b, drawn_state_rate(s).unwrap_or(PREVIEW_STATE_RATE)))
 }
 
 impl Sinks {
@@ -135,6 +162,7 @@ impl Sinks {
             state_delay: 0.0,
             heartbeat: None,
             state_period: None,
+            osc_states: false,
         };
         sinks.derive_timing();
         sinks
@@ -152,7 +180,8 @@ impl Sinks {
             .as_ref()
             .and_then(|o| o.heartbeat_seconds)
             .map(Duration::from_secs_f64);
-        self.state_period = state_rate(s).map(|r| 1.0 / r);
+        self.state_period = drawn_state_rate(s).map(|r| 1.0 / r);
+        self.osc_states = state_rate(s).is_some();
     }
 
     /// Reload by difference: rebuilds only the sinks whose settings changed, so that a
@@ -195,7 +224,7 @@ impl Sinks {
             }
             _ => {}
         }
-        if new.bounce != old.bounce || state_rate(new) != state_rate(&old) {
+        if new.bounce != old.bounce || drawn_state_rate(new) != drawn_state_rate(&old) {
             if let Some(b) = &self.bounce {
                 report.late_bounce_hits += b.late_hits();
             }
@@ -207,21 +236,94 @@ impl Sinks {
     }
 
     /// States are drawn when OSC asks for them (`bounce_state_rate`, which only an
-    /// `[osc]` section sets).
+    /// `[osc]` section sets) or the preview shows them.
     fn states_wanted(&self) -> bool {
         self.bounce.is_some() && self.state_period.is_some()
+    }
+
+    /// Draws the bounce states up to stream time `until` and sends them where they go.
+    fn draw_states(&mut self, until: f64, preview: Option<&PreviewHub>) {
+        let Sinks {
+            bounce,
+            osc,
+            osc_states,
+            ..
+        } = self;
+        let Some(b) = bounce.as_mut() else {
+            return;
+        };
+        let preview = preview.filter(|p| p.watched());
+        b.draw_until(until, |s| {
+            if *osc_states {
+                if let Some(o) = osc.as_mut() {
+                    o.send_bounce_state(&s);
+                }
+            }
+            if let Some(p) = preview {
+                p.publish("state", &state_json(&s));
+            }
+        });
+    }
+}
+
+/// The preview's `hello`: the patterns, and the wall-clock time of stream time 0.
+fn hello_json(s: &OutputSettings, origin: SystemTime) -> String {
+    let patterns: Vec<serde_json::Value> = s
+        .patterns
+        .iter()
+        .map(|(name, kind)| serde_json::json!({ "name": name, "kind": kind }))
+        .collect();
+    let origin = origin
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    serde_json::json!({
+        "patterns": patterns,
+        "bounce": s.bounce.is_some(),
+        "origin_unix_seconds": origin,
+    })
+    .to_string()
+}
+
+fn state_json(s: &BounceState) -> String {
+    serde_json::json!({ "time": s.time, "height": s.height, "velocity": s.velocity }).to_string()
+}
+
+fn hit_json(h: &LiveHit) -> String {
+    serde_json::json!({
+        "event": h.event,
+        "time": h.time,
+        "launch_velocity": h.launch_velocity,
+        "predicted_landing": h.predicted_landing,
+        "apex": h.apex,
+        "squash": h.squash,
+    })
+    .to_string()
+}
+
+fn publish_sound(preview: Option<&PreviewHub>, e: &Event) {
+    if let Some(p) = preview.filter(|p| p.watched()) {
+        if let Ok(json) = serde_json::to_string(e) {
+            p.publish("sound", &json);
+        }
     }
 }
 
 /// Runs the output thread's loop until [`OutputMessage::Stop`] (or every sender is
-/// gone). `origin` is the wall-clock time of stream time 0.
+/// gone). `origin` is the wall-clock time of stream time 0; `preview`, the preview
+/// page's hub when it is served.
 pub fn run(
     settings: OutputSettings,
     rx: Receiver<OutputMessage>,
     status: Arc<Status>,
     origin: SystemTime,
+    preview: Option<PreviewHub>,
 ) -> OutputReport {
     let mut sinks = Sinks::new(&settings, origin);
+    let preview = preview.as_ref();
+    if let Some(p) = preview {
+        p.set_hello(&hello_json(&settings, origin));
+    }
+    let mut next_preview_status = Instant::now();
     let mut report = OutputReport::default();
     // Continuous events whose begin was sent and whose end was not.
     let mut open: Vec<Event> = Vec::with_capacity(16);
@@ -248,6 +350,9 @@ pub fn run(
         if sinks.states_wanted() {
             let period = sinks.state_period.unwrap_or(0.25).min(0.25);
             wake = wake.min(now + Duration::from_secs_f64(period));
+        }
+        if preview.is_some() {
+            wake = wake.min(next_preview_status);
         }
         let message = rx.recv_timeout(wake.saturating_duration_since(now));
         match message {
@@ -279,6 +384,7 @@ pub fn run(
                     m.play(&e, Instant::now());
                 }
                 printer.event(&e, begin_sent);
+                publish_sound(preview, &e);
                 if let Some(b) = sinks.bounce.as_mut() {
                     let late = b.late_hits();
                     let hit = b.on_event(&e);
@@ -293,29 +399,33 @@ pub fn run(
                         if let Some(o) = sinks.osc.as_mut() {
                             o.send_bounce_hit(&hit);
                         }
+                        if let Some(p) = preview {
+                            p.publish("hit", &hit_json(&hit));
+                        }
                     }
                 }
             }
             Ok(OutputMessage::Reconfigure(new)) => {
                 let changed = sinks.reconfigure(&new, &mut report);
+                if let Some(p) = preview {
+                    p.set_hello(&hello_json(&new, origin));
+                }
                 if !changed.is_empty() {
                     tracing::info!(changed = %changed.join(", "), "outputs reloaded");
                 }
             }
             Ok(OutputMessage::CutOff) => {
-                cut_off(&mut sinks, &mut open, status.stream_seconds());
+                cut_off(&mut sinks, &mut open, status.stream_seconds(), preview);
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
                 // The states the delay held back, up to the end of the stream.
                 if sinks.states_wanted() {
-                    let Sinks { bounce, osc, .. } = &mut sinks;
-                    if let (Some(b), Some(o)) = (bounce.as_mut(), osc.as_mut()) {
-                        b.draw_until(status.stream_seconds(), |s| o.send_bounce_state(&s));
-                    }
+                    sinks.draw_states(status.stream_seconds(), preview);
                 }
-                cut_off(&mut sinks, &mut open, status.stream_seconds());
+                cut_off(&mut sinks, &mut open, status.stream_seconds(), preview);
                 collect(&sinks, &mut report);
                 report.print_dropped = printer.finish();
+                report.preview_closed = preview.map_or(0, PreviewHub::closed_slow);
                 return report;
             }
             Err(RecvTimeoutError::Timeout) => {}
@@ -343,22 +453,45 @@ pub fn run(
             }
         }
         if sinks.states_wanted() {
-            let until = status.stream_seconds() - sinks.state_delay;
-            let Sinks { bounce, osc, .. } = &mut sinks;
-            if let (Some(b), Some(o)) = (bounce.as_mut(), osc.as_mut()) {
-                b.draw_until(until, |s| o.send_bounce_state(&s));
+            sinks.draw_states(status.stream_seconds() - sinks.state_delay, preview);
+        }
+        if let Some(p) = preview {
+            if now >= next_preview_status {
+                next_preview_status = now + PREVIEW_STATUS_PERIOD;
+                if p.watched() {
+                    p.publish("status", &status_json(&status, &report, &sinks, p));
+                }
             }
         }
     }
 }
 
+/// The counters of `/status`, and the others the daemon keeps, for the preview.
+fn status_json(status: &Status, report: &OutputReport, sinks: &Sinks, p: &PreviewHub) -> String {
+    serde_json::json!({
+        "stream_seconds": status.stream_seconds(),
+        "events": report.events,
+        "dropped_events": status.dropped_events(),
+        "overrun_samples": status.overrun_samples(),
+        "level_db": status.level_db(),
+        "bad_samples": status.bad_samples(),
+        "xruns": status.xruns(),
+        "late_bounce_hits": report.late_bounce_hits + sinks.bounce.as_ref().map_or(0, LiveBounce::late_hits),
+        "preview_closed": p.closed_slow(),
+    })
+    .to_string()
+}
+
 /// Ends every open continuous event at stream time `at` and releases every note.
-fn cut_off(sinks: &mut Sinks, open: &mut Vec<Event>, at: f64) {
-    for e in open.drain(..) {
+fn cut_off(sinks: &mut Sinks, open: &mut Vec<Event>, at: f64, preview: Option<&PreviewHub>) {
+    for mut e in open.drain(..) {
         tracing::info!(pattern = %e.pattern, id = e.id, "held sound cut off");
+        // Its end, sent as the `/end` of the begin that was sent.
+        e.end = Some(at.max(e.time));
         if let Some(o) = sinks.osc.as_mut() {
-            o.send_cut_off(&e, at);
+            o.send_event(&e, true);
         }
+        publish_sound(preview, &e);
         if let Some(m) = sinks.midi.as_mut() {
             m.release_event(e.id);
         }

@@ -302,14 +302,6 @@ impl OscSink {
         );
     }
 
-    /// Sends a *continuous event cut off* (stop or reload in the middle of a held sound)
-    /// as its `/end` at `at`.
-    pub fn send_cut_off(&mut self, begin: &Event, at: f64) {
-        let mut ended = begin.clone();
-        ended.end = Some(at.max(begin.time));
-        self.send_event(&ended, true);
-    }
-
     /// `/bounce/hit`: launch velocity, launch time, predicted landing, apex, squash, id.
     pub fn send_bounce_hit(&mut self, hit: &LiveHit) {
         self.send(
