@@ -8,13 +8,15 @@
 //! libasound2-plugins, liblo-tools, jackd2, jack-tools) and runs these tests.
 
 use std::fs;
-use std::io::Read;
-use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
 
 mod common;
+use common::procs::{
+    free_udp_port, read, signal, spawn, spawn_child, unix_now, wait_exit, wait_for_text, Guard,
+    OscDump, OscLine,
+};
 use common::root;
 
 const BIN: &str = env!("CARGO_BIN_EXE_onomato");
@@ -28,16 +30,6 @@ static REAL_TIME_AUDIO: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// null sink can hand a capture its audio in blocks of up to 2 s, and a loaded machine
 /// delays it further. What each test measures of delays it asserts by itself.
 const CAPTURE_CATCH_UP: Duration = Duration::from_secs(15);
-
-/// A child process killed when the test ends, whatever happens.
-struct Guard(Child);
-
-impl Drop for Guard {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 /// A server stopped with SIGTERM (then killed if it does not stop): jackd removes its
 /// entry from JACK's shared registry only then, and the registry holds few servers.
@@ -64,42 +56,6 @@ impl Drop for Server {
     }
 }
 
-fn spawn_child(cmd: &mut Command, what: &str) -> Child {
-    cmd.spawn().unwrap_or_else(|e| {
-        panic!("cannot start {what}: {e} (bash scripts/test.sh installs what these tests need)")
-    })
-}
-
-fn spawn(cmd: &mut Command, what: &str) -> Guard {
-    Guard(spawn_child(cmd, what))
-}
-
-fn signal(child: &Child, name: &str) {
-    let number = match name {
-        "HUP" => libc::SIGHUP,
-        "TERM" => libc::SIGTERM,
-        "INT" => libc::SIGINT,
-        other => panic!("unknown signal {other}"),
-    };
-    // SAFETY: kill(2) with a pid of our own child; no memory is involved.
-    let rc = unsafe { libc::kill(child.id() as libc::pid_t, number) };
-    assert_eq!(rc, 0, "cannot send SIG{name}");
-}
-
-fn wait_exit(child: &mut Child, timeout: Duration) -> ExitStatus {
-    let start = Instant::now();
-    loop {
-        if let Some(s) = child.try_wait().expect("wait") {
-            return s;
-        }
-        assert!(
-            start.elapsed() < timeout,
-            "the process did not exit within {timeout:?}"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
 /// Sends SIGTERM and expects a clean exit (code 0) within 10 s; returns the log.
 fn stop_cleanly(mut d: Daemon) -> String {
     signal(&d.child, "TERM");
@@ -107,133 +63,6 @@ fn stop_cleanly(mut d: Daemon) -> String {
     let log = read(&d.stderr);
     assert!(status.success(), "exit {status:?}: {log}");
     log
-}
-
-fn read(path: &Path) -> String {
-    let mut s = String::new();
-    if let Ok(mut f) = fs::File::open(path) {
-        let _ = f.read_to_string(&mut s);
-    }
-    s
-}
-
-/// Waits until `path` holds `text`.
-fn wait_for_text(path: &Path, text: &str, timeout: Duration) {
-    let start = Instant::now();
-    while !read(path).contains(text) {
-        assert!(
-            start.elapsed() < timeout,
-            "'{text}' did not appear in {} within {timeout:?}; it holds:\n{}",
-            path.display(),
-            read(path)
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn unix_now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .unwrap()
-        .as_secs_f64()
-}
-
-fn free_udp_port() -> u16 {
-    UdpSocket::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-// ---------------------------------------------------------------- OSC receiver
-
-/// One message as oscdump printed it.
-#[derive(Debug, Clone)]
-struct OscLine {
-    /// Arrival, Unix seconds (oscdump stamps messages that are not in a bundle with
-    /// their arrival time).
-    arrival: f64,
-    addr: String,
-    args: Vec<String>,
-}
-
-impl OscLine {
-    fn f(&self, i: usize) -> f64 {
-        self.args[i]
-            .parse()
-            .unwrap_or_else(|_| panic!("argument {i} of {self:?}"))
-    }
-    fn s(&self, i: usize) -> &str {
-        self.args[i].trim_matches('"')
-    }
-}
-
-struct OscDump {
-    _child: Guard,
-    out: PathBuf,
-    port: u16,
-}
-
-impl OscDump {
-    fn start(dir: &Path) -> Self {
-        Self::start_on(dir, free_udp_port(), "")
-    }
-
-    /// A receiver on `port`, writing to its own file (`tag` tells two apart).
-    fn start_on(dir: &Path, port: u16, tag: &str) -> Self {
-        let out = dir.join(format!("oscdump-{port}{tag}.txt"));
-        let child = spawn(
-            Command::new("stdbuf")
-                .args(["-oL", "oscdump", "-L", &port.to_string()])
-                .stdout(fs::File::create(&out).unwrap())
-                .stderr(Stdio::null()),
-            "oscdump (liblo-tools)",
-        );
-        std::thread::sleep(Duration::from_millis(200));
-        Self {
-            _child: child,
-            out,
-            port,
-        }
-    }
-
-    fn target(&self) -> String {
-        format!("127.0.0.1:{}", self.port)
-    }
-
-    fn messages(&self) -> Vec<OscLine> {
-        read(&self.out)
-            .lines()
-            .filter_map(|line| {
-                let mut parts = line.split_whitespace();
-                let tag = parts.next()?;
-                let (secs, frac) = tag.split_once('.')?;
-                let secs = u64::from_str_radix(secs, 16).ok()?;
-                let frac = u64::from_str_radix(frac, 16).ok()?;
-                let arrival = secs as f64 - 2_208_988_800.0 + frac as f64 / 4_294_967_296.0;
-                let addr = parts.next()?.to_string();
-                let _types = parts.next();
-                Some(OscLine {
-                    arrival,
-                    addr,
-                    args: parts.map(str::to_string).collect(),
-                })
-            })
-            .collect()
-    }
-
-    fn wait_count(&self, pred: impl Fn(&OscLine) -> bool, n: usize, timeout: Duration) {
-        let start = Instant::now();
-        while self.messages().iter().filter(|m| pred(m)).count() < n {
-            assert!(
-                start.elapsed() < timeout,
-                "fewer than {n} matching OSC messages within {timeout:?}; got:\n{}",
-                read(&self.out)
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
 }
 
 // ---------------------------------------------------------------- servers

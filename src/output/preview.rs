@@ -42,6 +42,10 @@ const IO_TIMEOUT: Duration = Duration::from_secs(5);
 const KEEP_ALIVE: Duration = Duration::from_secs(15);
 /// Largest request head read.
 const MAX_HEAD: usize = 8192;
+/// What the system may hold of a stream for a browser that does not read (left to
+/// itself, Linux grows it past a megabyte: minutes of states). With it, a stalled
+/// browser fills its queue within seconds and loses its stream.
+const STREAM_SEND_BUFFER: libc::c_int = 64 * 1024;
 
 /// The output thread's side: publishes to every open stream without waiting.
 #[derive(Clone)]
@@ -344,8 +348,30 @@ fn serve(mut socket: TcpStream, hub: &PreviewHub, stop: &AtomicBool) -> std::io:
     }
 }
 
+/// Sets the socket's send buffer (`SO_SNDBUF`).
+fn set_send_buffer(socket: &TcpStream, bytes: libc::c_int) -> std::io::Result<()> {
+    use std::os::fd::AsRawFd;
+    // SAFETY: setsockopt(2) on a descriptor the stream owns, with a pointer to a c_int
+    // that lives through the call and its size.
+    let rc = unsafe {
+        libc::setsockopt(
+            socket.as_raw_fd(),
+            libc::SOL_SOCKET,
+            libc::SO_SNDBUF,
+            (&bytes as *const libc::c_int).cast(),
+            std::mem::size_of::<libc::c_int>() as libc::socklen_t,
+        )
+    };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
 /// One browser's stream of events, until it goes, stops reading, or the server stops.
 fn stream(mut socket: TcpStream, hub: &PreviewHub, stop: &AtomicBool) -> std::io::Result<()> {
+    set_send_buffer(&socket, STREAM_SEND_BUFFER)?;
     socket.write_all(
         b"HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\n\r\nretry: 500\n\n",
     )?;

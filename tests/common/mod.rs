@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 use onomato::config::{DetectorSettings, Method, PatternKind};
 use onomato::Pattern;
 
+pub mod procs;
+
 pub const RATE: u32 = 22_050;
 
 /// The project's folder (the example, its config and its patterns are there).
