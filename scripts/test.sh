@@ -5,7 +5,8 @@
 #
 # The daemon's tests use real parts, each started by the test itself in a folder of its
 # own: a PulseAudio server with a null sink (captured through ALSA's default device), a
-# JACK server with the dummy driver and jack_midi_dump, and oscdump as OSC receiver.
+# JACK server with the dummy driver and jack_midi_dump, oscdump as OSC receiver, and
+# Chromium for the pages.
 # MIDI goes through JACK there (this machine has no ALSA sequencer), so the tests are
 # built with the `jack` feature.
 set -euo pipefail
@@ -21,10 +22,15 @@ packages=(
   puredata-core                          # the Pure Data recipe, run headless
   librsvg2-bin                           # rsvg-convert renders the plot in a test
   systemd                                # systemd-analyze rates and checks the unit
-  chromium                               # a real browser opens the page render writes
+  chromium                               # a real browser opens render's pages and the preview
   ffmpeg fonts-dejavu-core               # render's MP4 (encoding, labels), and ffprobe
 )
 bash scripts/install-packages.sh "${packages[@]}"
+
+# The preview's tests drive Chromium with playwright-core (tests/browser), at the
+# version its lock file names; node and npm come with the machine, else from Debian.
+command -v npm >/dev/null || bash scripts/install-packages.sh nodejs npm
+npm ci --prefix tests/browser --no-audit --no-fund --loglevel=error
 
 # --all-targets: the benchmarks and examples are built and run once too, so they
 # cannot rot.

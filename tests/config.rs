@@ -308,3 +308,40 @@ fn render_actions_and_tracks_are_checked_against_the_patterns() {
     assert_eq!(ok.render.scene, Some(Scene::Darts));
     assert_eq!(ok.render.tracks, [vec!["tick"], vec!["hoo", "tick"]]);
 }
+
+#[test]
+fn the_preview_section_defaults_to_loopback_and_refuses_what_is_not_an_address() {
+    use onomato::config::DEFAULT_PREVIEW_ADDRESS;
+    let config = Config::parse(&format!("{TICK}[preview]\n"), Path::new("."), "x").unwrap();
+    assert_eq!(
+        config.preview.unwrap().address.to_string(),
+        DEFAULT_PREVIEW_ADDRESS
+    );
+    assert!(Config::parse(TICK, Path::new("."), "x")
+        .unwrap()
+        .preview
+        .is_none());
+    // The example config's commented section, as a user would uncomment it.
+    let example = std::fs::read_to_string("config/onomato.toml").unwrap();
+    let uncommented = example.replace(
+        "# [preview]\n# address = \"127.0.0.1:8765\"",
+        "[preview]\naddress = \"127.0.0.1:8765\"",
+    );
+    assert_ne!(
+        uncommented, example,
+        "the example config documents [preview]"
+    );
+    let config = Config::parse(&uncommented, Path::new("config"), "example").unwrap();
+    assert_eq!(
+        config.preview.unwrap().address.to_string(),
+        "127.0.0.1:8765"
+    );
+    for (text, want) in [
+        ("[preview]\naddress = \"localhost\"\n", "[preview]: address must be an IP address and a port, such as '127.0.0.1:8765', found 'localhost'"),
+        ("[preview]\naddress = \"127.0.0.1\"\n", "found '127.0.0.1'"),
+        ("[preview]\nport = 8765\n", "unknown field `port`"),
+    ] {
+        let msg = parse_err(&format!("{TICK}{text}"));
+        assert!(msg.contains(want), "{text:?}: {msg}");
+    }
+}

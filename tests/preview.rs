@@ -26,7 +26,7 @@ fn example_after_silence(dir: &Path) -> PathBuf {
     let mut reader = hound::WavReader::open(root().join("examples/beat.wav")).unwrap();
     let spec = reader.spec();
     assert_eq!(spec.channels, 1);
-    let scale = f32::from(1u16 << (spec.bits_per_sample - 1) as u16).max(1.0);
+    let scale = 2f32.powi(i32::from(spec.bits_per_sample) - 1);
     let mut samples = vec![0.0f32; (LEAD_SECONDS * f64::from(spec.sample_rate)) as usize];
     match spec.sample_format {
         hound::SampleFormat::Int => {
