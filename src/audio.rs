@@ -158,14 +158,21 @@ impl WavSource {
         &self.path
     }
 
-    /// Reads up to `max_frames` frames as mono into `out` (cleared first). Returns the
-    /// number of frames read; 0 at the end of the file.
-    pub fn read_block(
+    /// Reads up to `max_frames` frames with every channel, interleaved (the replay
+    /// hands them on as a device would).
+    pub fn read_interleaved(
         &mut self,
         max_frames: usize,
         out: &mut Vec<f32>,
     ) -> Result<usize, AudioError> {
+        let frames = self.fill(max_frames)?;
         out.clear();
+        out.extend_from_slice(&self.interleaved);
+        Ok(frames)
+    }
+
+    /// Reads up to `max_frames` frames into `self.interleaved`; returns the frames read.
+    fn fill(&mut self, max_frames: usize) -> Result<usize, AudioError> {
         let channels = usize::from(self.channels);
         let wanted = max_frames * channels;
         self.interleaved.clear();
@@ -192,6 +199,21 @@ impl WavSource {
             }
         }
         let frames = self.interleaved.len() / channels;
+        self.frames_read += frames as u64;
+        Ok(frames)
+    }
+
+    /// Reads up to `max_frames` frames as mono into `out` (cleared first). Returns the
+    /// number of frames read; 0 at the end of the file.
+    pub fn read_block(
+        &mut self,
+        max_frames: usize,
+        out: &mut Vec<f32>,
+    ) -> Result<usize, AudioError> {
+        out.clear();
+        let channels = usize::from(self.channels);
+        self.fill(max_frames)?;
+        let frames = self.interleaved.len() / channels;
         match self.select {
             ChannelSelect::Mix if channels == 1 => out.extend_from_slice(&self.interleaved),
             ChannelSelect::Mix => {
@@ -208,7 +230,6 @@ impl WavSource {
                     .map(|f| f[usize::from(c)]),
             ),
         }
-        self.frames_read += frames as u64;
         Ok(frames)
     }
 

@@ -107,6 +107,10 @@ pub struct RecordArgs {
     /// Where to save the takes without --config.
     #[arg(long, default_value = ".", value_name = "DIR")]
     pub dir: PathBuf,
+    /// Enrol for this [[performer]] of the config: its channel is recorded and the
+    /// pattern goes into its [[performer.pattern]] sections.
+    #[arg(long, value_name = "NAME", requires = "config")]
+    pub performer: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -168,7 +172,7 @@ pub struct ListenArgs {
 impl ListenArgs {
     /// The validated configuration: the file and patterns, then the overrides.
     pub fn to_config(&self) -> anyhow::Result<Config> {
-        let mut config = self.source.to_config()?;
+        let mut config = self.source.to_daemon_config()?;
         if let Some(d) = &self.device {
             if d.trim().is_empty() {
                 anyhow::bail!("--device is empty; give a device name (see `onomato devices`)");
@@ -233,6 +237,10 @@ pub struct PatternSource {
     /// patterns, such as speech; 0 turns the guard off (overrides the config).
     #[arg(long, value_name = "SECONDS")]
     pub speech_guard: Option<f64>,
+    /// With a config of [[performer]]s: this performer's patterns and channel alone
+    /// (`listen` runs every performer without it).
+    #[arg(long, value_name = "NAME")]
+    pub performer: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -292,12 +300,45 @@ pub struct EvalArgs {
 }
 
 impl PatternSource {
-    /// The validated configuration these arguments describe.
+    /// The validated configuration these arguments describe, for one performer: a
+    /// config of `[[performer]]`s needs `--performer`.
     pub fn to_config(&self) -> anyhow::Result<Config> {
+        self.load(false)
+    }
+
+    /// As [`PatternSource::to_config`], keeping every performer unless `--performer`
+    /// names one (the daemon).
+    pub fn to_daemon_config(&self) -> anyhow::Result<Config> {
+        self.load(true)
+    }
+
+    fn load(&self, every_performer: bool) -> anyhow::Result<Config> {
         let mut config = match &self.config {
             Some(path) => Config::load(path)?,
             None => Config::default(),
         };
+        let from = || {
+            self.config
+                .as_ref()
+                .map_or("the command line".to_string(), |p| {
+                    format!("config '{}'", p.display())
+                })
+        };
+        if self.performer.is_some() || !(every_performer || config.performers.is_empty()) {
+            config = config
+                .select_performer(self.performer.as_deref())
+                .map_err(|m| anyhow::anyhow!("{}: {m}", from()))?;
+        } else if !config.performers.is_empty() {
+            if !self.patterns.is_empty() {
+                anyhow::bail!(
+                    "--pattern cannot be added to every performer of {}; name one with --performer",
+                    from()
+                );
+            }
+            if self.channel.is_some() {
+                anyhow::bail!("--channel: each performer of {} has its own channel; name one with --performer", from());
+            }
+        }
         config.add_cli_patterns(config::parse_pattern_args(&self.patterns)?)?;
         if let Some(method) = self.method {
             config.detector.method = method;
@@ -319,7 +360,7 @@ impl PatternSource {
         }
         config.detector.validate("command line")?;
         config.check_pattern_thresholds("command line")?;
-        if config.patterns.is_empty() {
+        if config.patterns.is_empty() && config.performers.is_empty() {
             anyhow::bail!(
                 "no patterns to detect: give --pattern NAME=FILE.wav (repeatable) or --config FILE with [[pattern]] entries"
             );
@@ -490,8 +531,30 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
     if let Some(d) = &args.device {
         input_settings.device = Some(d.clone());
     }
+    // The performer's channel; a config with performers needs one named.
+    let channel = match &args.performer {
+        Some(_) => {
+            config
+                .select_performer(args.performer.as_deref())
+                .map_err(|m| anyhow::anyhow!(m))?
+                .detector
+                .channel
+        }
+        None if !config.performers.is_empty() => {
+            return Err(anyhow::anyhow!(config
+                .select_performer(None)
+                .err()
+                .unwrap_or_default()));
+        }
+        None => config.detector.channel,
+    };
     let options = crate::record::RecordOptions {
         name: args.name.clone(),
+        performer: args.performer.clone(),
+        channel: channel.map_or(
+            crate::audio::ChannelSelect::Mix,
+            crate::audio::ChannelSelect::Index,
+        ),
         kind: if args.continuous {
             config::PatternKind::Continuous
         } else {

@@ -199,6 +199,20 @@ struct RawConfig {
     midi: Option<RawMidi>,
     render: Option<RawRender>,
     preview: Option<RawPreview>,
+    #[serde(default)]
+    performer: Vec<RawPerformer>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPerformer {
+    name: String,
+    channel: Option<u16>,
+    osc_prefix: Option<String>,
+    midi_channel: Option<u8>,
+    #[serde(default)]
+    pattern: Vec<RawPattern>,
+    bounce: Option<RawBounce>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -575,6 +589,25 @@ pub struct Config {
     pub render: RenderSettings,
     /// `None`: no preview page.
     pub preview: Option<PreviewSettings>,
+    /// `[[performer]]` sections: each an input channel with its own patterns and
+    /// outputs. Empty: one performer, the file's `[[pattern]]`s on `[detector] channel`.
+    pub performers: Vec<Performer>,
+}
+
+/// A performer (`[[performer]]`), validated: one input channel of the device, with its
+/// own patterns, OSC prefix, MIDI channel and bounce solver.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Performer {
+    pub name: String,
+    /// Input channel, from 0; `None`: the channels mixed.
+    pub channel: Option<u16>,
+    /// OSC address prefix (default: the `[osc]` prefix, then `/` and the name).
+    pub osc_prefix: String,
+    /// MIDI channel, 1-16 (default: the `[midi]` channel); a pattern's own wins.
+    pub midi_channel: Option<u8>,
+    pub patterns: Vec<PatternSpec>,
+    /// `None`: the bounce solver's defaults from the patterns' kinds, when it runs.
+    pub bounce: Option<BounceSettings>,
 }
 
 /// The live preview page (`listen --preview`), validated.
@@ -642,14 +675,81 @@ impl Config {
     /// Checks every continuous pattern's lower threshold against its threshold, after
     /// command-line overrides.
     pub fn check_pattern_thresholds(&self, origin: &str) -> Result<(), ConfigError> {
-        for p in &self.patterns {
-            check_thresholds(
-                &format!("{origin}, pattern '{}'", p.name),
-                p,
-                &self.detector,
-            )?;
+        for (name, c) in self.lanes() {
+            let who = name
+                .map(|n| format!(", performer '{n}'"))
+                .unwrap_or_default();
+            for p in &c.patterns {
+                check_thresholds(
+                    &format!("{origin}{who}, pattern '{}'", p.name),
+                    p,
+                    &self.detector,
+                )?;
+            }
         }
         Ok(())
+    }
+
+    /// What each performer runs on: one config per performer, holding only that
+    /// performer's patterns, channel, OSC prefix, MIDI channel and bounce settings, with
+    /// its name; without `[[performer]]` sections, this config, unnamed.
+    pub fn lanes(&self) -> Vec<(Option<String>, Config)> {
+        if self.performers.is_empty() {
+            return vec![(None, self.clone())];
+        }
+        self.performers
+            .iter()
+            .map(|p| (Some(p.name.clone()), self.for_performer(p)))
+            .collect()
+    }
+
+    /// The config of the performer named `name` alone (see [`Config::lanes`]); `None`
+    /// keeps a config without performers as it is. An error names what was asked and
+    /// what there is.
+    pub fn select_performer(&self, name: Option<&str>) -> Result<Config, String> {
+        let names = || {
+            self.performers
+                .iter()
+                .map(|p| format!("'{}'", p.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        match (name, self.performers.is_empty()) {
+            (None, true) => Ok(self.clone()),
+            (None, false) => Err(format!(
+                "the config has performers ({}); name one with --performer",
+                names()
+            )),
+            (Some(n), true) => Err(format!(
+                "--performer '{n}': the config has no [[performer]] sections"
+            )),
+            (Some(n), false) => self
+                .performers
+                .iter()
+                .find(|p| p.name == n)
+                .map(|p| self.for_performer(p))
+                .ok_or_else(|| {
+                    format!(
+                        "--performer '{n}': no such performer; the config has {}",
+                        names()
+                    )
+                }),
+        }
+    }
+
+    fn for_performer(&self, p: &Performer) -> Config {
+        let mut c = self.clone();
+        c.performers = Vec::new();
+        c.patterns = p.patterns.clone();
+        c.bounce = p.bounce.clone();
+        c.detector.channel = p.channel;
+        if let Some(o) = c.osc.as_mut() {
+            o.prefix = p.osc_prefix.clone();
+        }
+        if let (Some(m), Some(ch)) = (c.midi.as_mut(), p.midi_channel) {
+            m.channel = ch;
+        }
+        c
     }
 
     /// The bounce settings to use: the config's, or defaults for its patterns.
@@ -756,55 +856,7 @@ impl RawConfig {
         };
         detector.validate(origin)?;
 
-        let mut patterns: Vec<PatternSpec> = Vec::with_capacity(self.pattern.len());
-        for (i, p) in self.pattern.into_iter().enumerate() {
-            let item = format!("{origin}, pattern #{} ('{}')", i + 1, p.name);
-            check_pattern_name(&p.name).map_err(|m| invalid(&item, m))?;
-            if patterns.iter().any(|q| q.name == p.name) {
-                return Err(invalid(
-                    &item,
-                    format!(
-                        "pattern name '{}' is used twice; names must be unique",
-                        p.name
-                    ),
-                ));
-            }
-            if p.takes.is_empty() {
-                return Err(invalid(
-                    &item,
-                    "takes is empty; expected at least one WAV file".into(),
-                ));
-            }
-            if let Some(t) = p.threshold {
-                check_unit_interval(&item, "threshold", t)?;
-            }
-            if let Some(t) = p.continuous_threshold {
-                check_unit_interval(&item, "continuous_threshold", t)?;
-                if p.kind == PatternKind::Impulse {
-                    return Err(invalid(
-                        &item,
-                        "continuous_threshold is only for kind = \"continuous\", found kind = \"impulse\"".into(),
-                    ));
-                }
-            }
-            let spec = PatternSpec {
-                name: p.name,
-                kind: p.kind,
-                takes: p.takes.into_iter().map(|t| base.join(t)).collect(),
-                threshold: p.threshold,
-                continuous_threshold: p.continuous_threshold,
-                note: p.note,
-                midi_channel: p.channel,
-            };
-            if let Some(n) = spec.note {
-                check_note(&item, "note", n)?;
-            }
-            if let Some(c) = spec.midi_channel {
-                check_channel(&item, c)?;
-            }
-            check_thresholds(&item, &spec, &detector)?;
-            patterns.push(spec);
-        }
+        let patterns = validate_patterns(self.pattern, base, origin, &detector)?;
 
         let bounce = match self.bounce {
             None => None,
@@ -832,6 +884,20 @@ impl RawConfig {
                 .map_err(|m| invalid(&format!("{origin}, [preview]"), m))?,
             }),
         };
+        let performers =
+            validate_performers(self.performer, base, origin, &detector, osc.as_ref())?;
+        if !performers.is_empty() {
+            let item = format!("{origin}, [[performer]]");
+            if !patterns.is_empty() {
+                return Err(invalid(&item, "[[pattern]] sections cannot be used with [[performer]]; each performer's patterns are its own [[performer.pattern]] sections".into()));
+            }
+            if bounce.is_some() {
+                return Err(invalid(&item, "[bounce] cannot be used with [[performer]]; give a performer its own [performer.bounce]".into()));
+            }
+            if detector.channel.is_some() {
+                return Err(invalid(&item, "[detector] channel cannot be used with [[performer]]; each performer names its own channel".into()));
+            }
+        }
         Ok(Config {
             detector,
             patterns,
@@ -841,8 +907,131 @@ impl RawConfig {
             midi,
             render,
             preview,
+            performers,
         })
     }
+}
+
+fn validate_performers(
+    raw: Vec<RawPerformer>,
+    base: &Path,
+    origin: &str,
+    detector: &DetectorSettings,
+    osc: Option<&OscSettings>,
+) -> Result<Vec<Performer>, ConfigError> {
+    if raw.len() > crate::status::MAX_LANES {
+        return Err(invalid(
+            &format!("{origin}, [[performer]]"),
+            format!(
+                "at most {} performers, found {}",
+                crate::status::MAX_LANES,
+                raw.len()
+            ),
+        ));
+    }
+    let mut performers: Vec<Performer> = Vec::with_capacity(raw.len());
+    for (i, p) in raw.into_iter().enumerate() {
+        let item = format!("{origin}, performer #{} ('{}')", i + 1, p.name);
+        check_pattern_name(&p.name)
+            .map_err(|m| invalid(&item, m.replace("pattern name", "performer name")))?;
+        if performers.iter().any(|q| q.name == p.name) {
+            return Err(invalid(
+                &item,
+                format!(
+                    "performer name '{}' is used twice; names must be unique",
+                    p.name
+                ),
+            ));
+        }
+        let osc_prefix = p.osc_prefix.unwrap_or_else(|| {
+            let base = osc.map_or(DEFAULT_OSC_PREFIX, |o| o.prefix.as_str());
+            format!("{base}/{}", p.name)
+        });
+        check_osc_prefix(&osc_prefix).map_err(|m| invalid(&item, format!("osc_prefix: {m}")))?;
+        if let Some(c) = p.midi_channel {
+            check_channel(&item, c)?;
+        }
+        if p.pattern.is_empty() {
+            return Err(invalid(
+                &item,
+                "no [[performer.pattern]]; a performer needs at least one pattern".into(),
+            ));
+        }
+        let patterns = validate_patterns(p.pattern, base, &item, detector)?;
+        let bounce = match p.bounce {
+            None => None,
+            Some(b) => Some(b.validate(&patterns, &format!("{item}, [performer.bounce]"))?),
+        };
+        performers.push(Performer {
+            name: p.name,
+            channel: p.channel,
+            osc_prefix,
+            midi_channel: p.midi_channel,
+            patterns,
+            bounce,
+        });
+    }
+    Ok(performers)
+}
+
+/// Validates `[[pattern]]` sections (of the file, or of one performer; `origin` names
+/// where they are).
+fn validate_patterns(
+    raw: Vec<RawPattern>,
+    base: &Path,
+    origin: &str,
+    detector: &DetectorSettings,
+) -> Result<Vec<PatternSpec>, ConfigError> {
+    let mut patterns: Vec<PatternSpec> = Vec::with_capacity(raw.len());
+    for (i, p) in raw.into_iter().enumerate() {
+        let item = format!("{origin}, pattern #{} ('{}')", i + 1, p.name);
+        check_pattern_name(&p.name).map_err(|m| invalid(&item, m))?;
+        if patterns.iter().any(|q| q.name == p.name) {
+            return Err(invalid(
+                &item,
+                format!(
+                    "pattern name '{}' is used twice; names must be unique",
+                    p.name
+                ),
+            ));
+        }
+        if p.takes.is_empty() {
+            return Err(invalid(
+                &item,
+                "takes is empty; expected at least one WAV file".into(),
+            ));
+        }
+        if let Some(t) = p.threshold {
+            check_unit_interval(&item, "threshold", t)?;
+        }
+        if let Some(t) = p.continuous_threshold {
+            check_unit_interval(&item, "continuous_threshold", t)?;
+            if p.kind == PatternKind::Impulse {
+                return Err(invalid(
+                    &item,
+                    "continuous_threshold is only for kind = \"continuous\", found kind = \"impulse\"".into(),
+                ));
+            }
+        }
+        let spec = PatternSpec {
+            name: p.name,
+            kind: p.kind,
+            takes: p.takes.into_iter().map(|t| base.join(t)).collect(),
+            threshold: p.threshold,
+            continuous_threshold: p.continuous_threshold,
+            note: p.note,
+            midi_channel: p.channel,
+        };
+        if let Some(n) = spec.note {
+            check_note(&item, "note", n)?;
+        }
+        if let Some(c) = spec.midi_channel {
+            check_channel(&item, c)?;
+        }
+        check_thresholds(&item, &spec, detector)?;
+        patterns.push(spec);
+    }
+    Ok(patterns)
 }
 
 fn check_note(item: &str, key: &str, value: u8) -> Result<(), ConfigError> {

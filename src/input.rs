@@ -237,30 +237,31 @@ where
 /// A replay thread's handle.
 pub struct Replay {
     pub rate: u32,
+    /// Channels of each frame in the ring: the file's.
+    pub channels: u16,
     pub thread: std::thread::JoinHandle<Result<(), AudioError>>,
 }
 
-/// Replays `path` (mixed to mono, or one channel) into a new ring, `buffer_frames` at a
-/// time, at `speed` times real time, `repeat` times over. Sets `done` when the file has
-/// been played (or `stop` was set).
+/// Replays `path` into a new ring, every channel interleaved as a device delivers them,
+/// `buffer_frames` at a time, at `speed` times real time, `repeat` times over. Sets
+/// `done` when the file has been played (or `stop` was set).
 pub fn spawn_replay(
     path: &Path,
-    select: ChannelSelect,
     buffer_frames: usize,
     speed: f64,
     repeat: u32,
     stop: Arc<AtomicBool>,
     done: Arc<AtomicBool>,
 ) -> Result<(Replay, Consumer<f32>), CaptureError> {
-    let source = WavSource::open(path, select)?;
-    let rate = source.sample_rate();
+    let source = WavSource::open(path, ChannelSelect::Mix)?;
+    let (rate, channels) = (source.sample_rate(), source.channels());
     drop(source);
-    let (producer, consumer) = RingBuffer::<f32>::new(ring_samples(2.0, rate, 1));
+    let (producer, consumer) = RingBuffer::<f32>::new(ring_samples(2.0, rate, channels));
     let path: PathBuf = path.to_path_buf();
     let thread = std::thread::Builder::new()
         .name("onomato-replay".into())
         .spawn(move || {
-            let result = replay(&path, select, buffer_frames, speed, repeat, &stop, producer);
+            let result = replay(&path, buffer_frames, speed, repeat, &stop, producer);
             done.store(true, Ordering::Release);
             result
         })
@@ -268,12 +269,18 @@ pub fn spawn_replay(
             device: "replay".into(),
             message: format!("cannot start the replay thread: {e}"),
         })?;
-    Ok((Replay { rate, thread }, consumer))
+    Ok((
+        Replay {
+            rate,
+            channels,
+            thread,
+        },
+        consumer,
+    ))
 }
 
 fn replay(
     path: &Path,
-    select: ChannelSelect,
     buffer_frames: usize,
     speed: f64,
     repeat: u32,
@@ -284,13 +291,13 @@ fn replay(
     let start = Instant::now();
     let mut pushed = 0u64;
     for _ in 0..repeat.max(1) {
-        let mut source = WavSource::open(path, select)?;
+        let mut source = WavSource::open(path, ChannelSelect::Mix)?;
         let rate = f64::from(source.sample_rate());
         loop {
             if stop.load(Ordering::Acquire) {
                 return Ok(());
             }
-            let n = source.read_block(buffer_frames, &mut block)?;
+            let n = source.read_interleaved(buffer_frames, &mut block)?;
             if n == 0 {
                 break;
             }

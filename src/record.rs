@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use crate::audio::ChannelSelect;
 use crate::config::{Config, InputSettings, PatternKind};
 use crate::input;
 use crate::status::Status;
@@ -160,11 +161,13 @@ pub fn write_take(path: &Path, samples: &[f32], rate: u32) -> anyhow::Result<()>
     Ok(())
 }
 
-/// Adds the pattern `name` to the config text, or replaces its kind and takes, and
-/// leaves everything else as it was (comments, order, layout). `takes` are written
-/// as given (relative to the config file).
+/// Adds the pattern `name` to the config text (to the `[[performer]]` named
+/// `performer`, when given), or replaces its kind and takes, and leaves everything else
+/// as it was (comments, order, layout). `takes` are written as given (relative to the
+/// config file).
 pub fn update_config_text(
     text: &str,
+    performer: Option<&str>,
     name: &str,
     kind: PatternKind,
     takes: &[String],
@@ -176,13 +179,24 @@ pub fn update_config_text(
     for t in takes {
         files.push(t.as_str());
     }
-    let patterns = doc
+    let owner: &mut toml_edit::Table = match performer {
+        None => doc.as_table_mut(),
+        Some(who) => doc
+            .get_mut("performer")
+            .and_then(toml_edit::Item::as_array_of_tables_mut)
+            .and_then(|all| {
+                all.iter_mut()
+                    .find(|t| t.get("name").and_then(|n| n.as_str()) == Some(who))
+            })
+            .ok_or_else(|| format!("it has no [[performer]] named '{who}'"))?,
+    };
+    let patterns = owner
         .entry("pattern")
         .or_insert(toml_edit::Item::ArrayOfTables(
             toml_edit::ArrayOfTables::new(),
         ))
         .as_array_of_tables_mut()
-        .ok_or("'pattern' is not an array of tables ([[pattern]])")?;
+        .ok_or("'pattern' is not an array of tables ([[pattern]])".to_string())?;
     let existing = patterns
         .iter_mut()
         .find(|t| t.get("name").and_then(|n| n.as_str()) == Some(name));
@@ -206,6 +220,10 @@ pub fn update_config_text(
 #[derive(Debug, Clone)]
 pub struct RecordOptions {
     pub name: String,
+    /// The `[[performer]]` of the config the pattern is for; its channel is recorded.
+    pub performer: Option<String>,
+    /// The channel recorded (from the microphone or the file), or the mix.
+    pub channel: ChannelSelect,
     pub kind: PatternKind,
     pub takes: usize,
     /// The config to update; takes are saved beside it. `None`: saved in `dir`.
@@ -251,7 +269,7 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
     let mut good: Vec<(Vec<f32>, u32)> = Vec::new();
     match &options.input {
         Some(path) => {
-            let mut source = crate::audio::WavSource::open(path, crate::audio::ChannelSelect::Mix)?;
+            let mut source = crate::audio::WavSource::open(path, options.channel)?;
             let rate = source.sample_rate();
             let samples = source.read_all()?;
             for found in find_takes(&samples, rate, options.max_seconds) {
@@ -297,7 +315,11 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
     }
     let mut names = Vec::new();
     for (k, (samples, rate)) in good.iter().enumerate() {
-        let file = format!("{}-{}.wav", options.name, k + 1);
+        // A performer's takes carry its name: two performers may both have a "tick".
+        let file = match &options.performer {
+            Some(who) => format!("{who}-{}-{}.wav", options.name, k + 1),
+            None => format!("{}-{}.wav", options.name, k + 1),
+        };
         let path = dir.join(&file);
         write_take(&path, samples, *rate)?;
         let _ = writeln!(err, "saved {}", path.display());
@@ -306,12 +328,20 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
     }
     match (&options.config, config_text) {
         (Some(path), Some(text)) => {
-            let updated = update_config_text(&text, &options.name, options.kind, &names)
-                .map_err(|m| anyhow::anyhow!("cannot update config '{}': {m}", path.display()))?;
+            let updated = update_config_text(
+                &text,
+                options.performer.as_deref(),
+                &options.name,
+                options.kind,
+                &names,
+            )
+            .map_err(|m| anyhow::anyhow!("cannot update config '{}': {m}", path.display()))?;
             // The new config must load, takes included, before it replaces the old one.
             let base = path.parent().unwrap_or(Path::new("."));
             let origin = format!("config '{}'", path.display());
-            let config = Config::parse(&updated, base, &origin)?;
+            let config = Config::parse(&updated, base, &origin)?
+                .select_performer(options.performer.as_deref())
+                .map_err(|m| anyhow::anyhow!("config '{}': {m}", path.display()))?;
             let patterns = crate::pattern::load_patterns(&config.patterns, &config.detector)?;
             let look_alike = crate::pattern::look_alike_patterns(patterns, &config.detector)?;
             let temp = path.with_extension("toml.new");
@@ -401,7 +431,10 @@ fn record_from_microphone(
             let _ = consumer.pop_partial_slice(&mut frame[..frames * channels]);
             let block: Vec<f32> = frame[..frames * channels]
                 .chunks_exact(channels)
-                .map(|f| f.iter().sum::<f32>() / channels as f32)
+                .map(|f| match options.channel {
+                    ChannelSelect::Index(i) if usize::from(i) < channels => f[usize::from(i)],
+                    _ => f.iter().sum::<f32>() / channels as f32,
+                })
                 .collect();
             let peak = block.iter().fold(0.0f32, |m, x| m.max(x.abs()));
             let db = 20.0 * f64::from(peak.max(1e-6)).log10();

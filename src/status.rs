@@ -15,7 +15,12 @@ pub struct Status {
     pub(crate) dropped_events: AtomicU64,
     pub(crate) xruns: AtomicU64,
     pub(crate) level_db_bits: AtomicU32,
+    /// Each performer's level (its channel), as `level_db_bits`.
+    pub(crate) lane_level_db_bits: [AtomicU32; MAX_LANES],
 }
+
+/// Performers whose level is kept (the config allows no more).
+pub const MAX_LANES: usize = 8;
 
 impl Status {
     /// Stream time the detector has reached, seconds.
@@ -59,5 +64,11 @@ impl Status {
     /// Peak level of the last block read, dBFS.
     pub fn level_db(&self) -> f32 {
         f32::from_bits(self.level_db_bits.load(Ordering::Relaxed))
+    }
+    /// Peak level of performer `lane`'s channel in the last block read, dBFS.
+    pub fn lane_level_db(&self, lane: usize) -> f32 {
+        self.lane_level_db_bits
+            .get(lane)
+            .map_or(-120.0, |b| f32::from_bits(b.load(Ordering::Relaxed)))
     }
 }

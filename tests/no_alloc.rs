@@ -125,10 +125,11 @@ fn processing_blocks_allocates_nothing_through_the_resampler() {
 }
 
 /// The daemon's detector thread work, block by block: stereo frames from the ring at
-/// 48 kHz, mixed down, resampled, detected, handed over with `try_send`.
+/// 48 kHz, given to two performers (the left channel, and the mix), resampled,
+/// detected, handed over with `try_send`.
 fn check_stage(method: Method) {
     use onomato::audio::ChannelSelect;
-    use onomato::daemon::{DetectorStage, FrameLayout, Status};
+    use onomato::daemon::{DetectorStage, LaneDetector, Status};
     use onomato::output::OutputMessage;
     use std::sync::Arc;
 
@@ -136,14 +137,16 @@ fn check_stage(method: Method) {
     let rate = 48_000;
     let mono = onomato::audio::resample_clip(&scene(), RATE, rate).unwrap();
     let stereo: Vec<f32> = mono.iter().flat_map(|&x| [x, x]).collect();
-    let det = Detector::new(patterns, &settings, rate).unwrap();
+    let lanes = [ChannelSelect::Index(0), ChannelSelect::Mix]
+        .into_iter()
+        .map(|select| LaneDetector {
+            detector: Detector::new(patterns.clone(), &settings, rate).unwrap(),
+            select,
+        })
+        .collect();
     let (mut producer, consumer) = rtrb::RingBuffer::<f32>::new(48_000 * 2);
     let (tx, rx) = std::sync::mpsc::sync_channel::<OutputMessage>(1024);
-    let layout = FrameLayout {
-        channels: 2,
-        select: ChannelSelect::Mix,
-    };
-    let mut stage = DetectorStage::new(det, consumer, layout, 256, tx, Arc::new(Status::default()));
+    let mut stage = DetectorStage::new(lanes, consumer, 2, 256, tx, Arc::new(Status::default()));
     let feed = 2 * 256;
     let warm = 2 * rate as usize;
     for chunk in stereo[..warm].chunks(feed) {
@@ -160,19 +163,26 @@ fn check_stage(method: Method) {
     });
     assert_eq!(n, 0, "{n} allocations in the detector stage ({method:?})");
     stage.finish();
-    let events: Vec<Event> = rx
+    let events: Vec<(usize, Event)> = rx
         .try_iter()
         .filter_map(|m| match m {
-            OutputMessage::Event(e) => Some(e),
+            OutputMessage::Event(lane, e) => Some((lane, e)),
             _ => None,
         })
         .collect();
-    let impulses = events
-        .iter()
-        .filter(|e| e.kind == onomato::PatternKind::Impulse)
-        .count();
-    let held = events.iter().filter(|e| e.end.is_some()).count();
-    assert_eq!((impulses, held), (18, 1), "{events:#?}");
+    for lane in 0..2 {
+        let events: Vec<&Event> = events
+            .iter()
+            .filter(|(l, _)| *l == lane)
+            .map(|(_, e)| e)
+            .collect();
+        let impulses = events
+            .iter()
+            .filter(|e| e.kind == onomato::PatternKind::Impulse)
+            .count();
+        let held = events.iter().filter(|e| e.end.is_some()).count();
+        assert_eq!((impulses, held), (18, 1), "performer {lane}: {events:#?}");
+    }
 }
 
 #[test]
@@ -269,23 +279,22 @@ fn deciding_between_patterns_alike_at_first_allocates_nothing_and_ignores_block_
 #[test]
 fn a_cut_off_the_output_thread_cannot_take_yet_waits_without_blocking_detection_or_reordering() {
     use onomato::audio::ChannelSelect;
-    use onomato::daemon::{DetectorStage, FrameLayout, Status};
+    use onomato::daemon::{DetectorStage, LaneDetector, Status};
     use onomato::output::OutputMessage;
     use std::sync::Arc;
 
     let (settings, patterns) = patterns_for(Method::Spectral);
     let rate = RATE;
     let mono = scene();
-    let det = Detector::new(patterns, &settings, rate).unwrap();
+    let det = LaneDetector {
+        detector: Detector::new(patterns, &settings, rate).unwrap(),
+        select: ChannelSelect::Mix,
+    };
     let (mut producer, consumer) = rtrb::RingBuffer::<f32>::new(rate as usize);
     // A queue of two that nobody reads for a while: an output thread that is stuck.
     let (tx, rx) = std::sync::mpsc::sync_channel::<OutputMessage>(2);
-    let layout = FrameLayout {
-        channels: 1,
-        select: ChannelSelect::Mix,
-    };
     let status = Arc::new(Status::default());
-    let mut stage = DetectorStage::new(det, consumer, layout, 256, tx, status.clone());
+    let mut stage = DetectorStage::new(vec![det], consumer, 1, 256, tx, status.clone());
     let third = mono.len() / 3;
     let mut feed = |stage: &mut DetectorStage, part: &[f32]| {
         for chunk in part.chunks(256) {
@@ -323,7 +332,7 @@ fn a_cut_off_the_output_thread_cannot_take_yet_waits_without_blocking_detection_
         .iter()
         .enumerate()
         .filter_map(|(i, m)| match m {
-            OutputMessage::Event(e)
+            OutputMessage::Event(_, e)
                 if e.end.is_none() || e.kind == onomato::PatternKind::Impulse =>
             {
                 Some((i, e.id))

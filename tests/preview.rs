@@ -218,7 +218,11 @@ fn check_ball(trace: &serde_json::Value) {
         let at = hit["at"].as_f64().unwrap();
         let frame = frames
             .iter()
-            .find(|f| f["time"].as_f64().unwrap() == t && f["at"].as_f64().unwrap() >= at)
+            .find(|f| {
+                f["performer"] == hit["performer"]
+                    && f["time"].as_f64().unwrap() == t
+                    && f["at"].as_f64().unwrap() >= at
+            })
             .unwrap_or_else(|| panic!("no frame drawn at the hit {hit}"));
         let bottom = frame["bottom"]
             .as_f64()
@@ -234,7 +238,10 @@ fn check_ball(trace: &serde_json::Value) {
             .iter()
             .filter(|f| {
                 let ft = f["time"].as_f64().unwrap();
-                f["at"].as_f64().unwrap() >= at && ft > t && ft < land.min(t + 2.0)
+                f["performer"] == hit["performer"]
+                    && f["at"].as_f64().unwrap() >= at
+                    && ft > t
+                    && ft < land.min(t + 2.0)
             })
             .filter_map(|f| f["bottom"].as_f64())
             .fold(f64::INFINITY, f64::min);

@@ -26,24 +26,43 @@ use crate::output::{self, OutputMessage, OutputReport, OutputSettings, PrintMode
 use crate::pattern::{self, Pattern};
 pub use crate::status::Status;
 
-/// How channels of the ring's frames become the detector's mono input.
-#[derive(Debug, Clone, Copy)]
-pub struct FrameLayout {
-    pub channels: usize,
+/// One performer's detection: the channel of the ring's frames it hears and its
+/// detector.
+pub struct LaneDetector {
+    pub detector: Detector,
     pub select: ChannelSelect,
 }
 
-/// The detector thread's work: read what the ring holds, mix it down, detect, hand the
-/// events over. Every buffer is made in [`DetectorStage::new`]; [`DetectorStage::poll`]
-/// allocates nothing (a test checks it).
-pub struct DetectorStage {
+struct Lane {
     detector: Detector,
-    consumer: Consumer<f32>,
-    layout: FrameLayout,
-    block_frames: usize,
-    interleaved: Vec<f32>,
+    select: ChannelSelect,
     mono: Vec<f32>,
     events: Vec<Event>,
+}
+
+impl Lane {
+    fn new(mut l: LaneDetector, block_frames: usize) -> Self {
+        l.detector.report_begins(true);
+        Self {
+            detector: l.detector,
+            select: l.select,
+            mono: Vec::with_capacity(block_frames),
+            events: Vec::with_capacity(256),
+        }
+    }
+}
+
+/// The detector thread's work: read what the ring holds, give each performer its
+/// channel (or the mix), detect, hand the events over tagged with the performer. Every
+/// buffer is made in [`DetectorStage::new`]; [`DetectorStage::poll`] allocates nothing
+/// (a test checks it).
+pub struct DetectorStage {
+    lanes: Vec<Lane>,
+    consumer: Consumer<f32>,
+    /// Channels of each frame in the ring.
+    channels: usize,
+    block_frames: usize,
+    interleaved: Vec<f32>,
     sender: SyncSender<OutputMessage>,
     /// Messages the output thread could not take yet, in order: a reconfiguration or
     /// cut-off waits here instead of blocking detection, and the events after it wait
@@ -57,31 +76,39 @@ pub struct DetectorStage {
 /// Events that may wait behind a control message the output thread has not taken.
 const BACKLOG: usize = 64;
 
+fn peak_db(peak: f32) -> f32 {
+    20.0 * peak.max(1e-6).log10()
+}
+
 impl DetectorStage {
+    /// `lanes`: one per performer, in the order of [`Config::lanes`]; `channels`: of each
+    /// frame in the ring.
     pub fn new(
-        mut detector: Detector,
+        lanes: Vec<LaneDetector>,
         consumer: Consumer<f32>,
-        layout: FrameLayout,
+        channels: usize,
         block_frames: usize,
         sender: SyncSender<OutputMessage>,
         status: Arc<Status>,
     ) -> Self {
-        detector.report_begins(true);
+        assert!(!lanes.is_empty(), "at least one performer");
+        let lanes: Vec<Lane> = lanes
+            .into_iter()
+            .map(|l| Lane::new(l, block_frames))
+            .collect();
         status
             .input_rate
-            .store(detector.input_rate(), Ordering::Relaxed);
+            .store(lanes[0].detector.input_rate(), Ordering::Relaxed);
         status
             .level_db_bits
             .store((-120.0f32).to_bits(), Ordering::Relaxed);
-        let channels = layout.channels.max(1);
+        let channels = channels.max(1);
         Self {
-            detector,
+            lanes,
             consumer,
-            layout: FrameLayout { channels, ..layout },
+            channels,
             block_frames,
             interleaved: vec![0.0; block_frames * channels],
-            mono: Vec::with_capacity(block_frames),
-            events: Vec::with_capacity(256),
             sender,
             backlog: VecDeque::with_capacity(BACKLOG + 2),
             bad_samples_before: 0,
@@ -92,7 +119,7 @@ impl DetectorStage {
     /// Processes at most one block of what the ring holds; returns the frames read (0
     /// when the ring had less than a block, unless `drain` is set: then any remainder).
     pub fn poll(&mut self, drain: bool) -> usize {
-        let channels = self.layout.channels;
+        let channels = self.channels;
         let available = self.consumer.slots() / channels;
         let frames = available.min(self.block_frames);
         if frames == 0 || (frames < self.block_frames && !drain) {
@@ -103,27 +130,33 @@ impl DetectorStage {
             .consumer
             .pop_partial_slice(&mut self.interleaved[..samples]);
         debug_assert_eq!(first.len(), samples);
-        self.mono.clear();
-        let mut peak = 0.0f32;
-        for frame in self.interleaved[..samples].chunks_exact(channels) {
-            let x = match self.layout.select {
-                ChannelSelect::Index(i) if usize::from(i) < channels => frame[usize::from(i)],
-                _ => frame.iter().sum::<f32>() / channels as f32,
-            };
-            peak = peak.max(x.abs());
-            self.mono.push(x);
+        let mut loudest = 0.0f32;
+        let mut bad = self.bad_samples_before;
+        for (index, lane) in self.lanes.iter_mut().enumerate() {
+            lane.mono.clear();
+            let mut peak = 0.0f32;
+            for frame in self.interleaved[..samples].chunks_exact(channels) {
+                let x = match lane.select {
+                    ChannelSelect::Index(i) if usize::from(i) < channels => frame[usize::from(i)],
+                    _ => frame.iter().sum::<f32>() / channels as f32,
+                };
+                peak = peak.max(x.abs());
+                lane.mono.push(x);
+            }
+            loudest = loudest.max(peak);
+            if let Some(level) = self.status.lane_level_db_bits.get(index) {
+                level.store(peak_db(peak).to_bits(), Ordering::Relaxed);
+            }
+            lane.detector.process(&lane.mono, &mut lane.events);
+            bad += lane.detector.bad_samples();
         }
-        let db = 20.0 * peak.max(1e-6).log10();
         self.status
             .level_db_bits
-            .store(db.to_bits(), Ordering::Relaxed);
-        self.detector.process(&self.mono, &mut self.events);
-        self.status.bad_samples.store(
-            self.bad_samples_before + self.detector.bad_samples(),
-            Ordering::Relaxed,
-        );
+            .store(peak_db(loudest).to_bits(), Ordering::Relaxed);
+        self.status.bad_samples.store(bad, Ordering::Relaxed);
+        let first = &self.lanes[0].detector;
         self.status.stream_samples.store(
-            (self.detector.stream_seconds() * f64::from(self.detector.input_rate())).round() as u64,
+            (first.stream_seconds() * f64::from(first.input_rate())).round() as u64,
             Ordering::Relaxed,
         );
         self.hand_over();
@@ -134,19 +167,32 @@ impl DetectorStage {
     /// what does not fit is counted. Never waits.
     fn hand_over(&mut self) {
         self.flush_backlog();
-        for e in self.events.drain(..) {
-            if !self.backlog.is_empty() {
-                if self.backlog.len() < BACKLOG {
-                    self.backlog.push_back(OutputMessage::Event(e));
-                } else {
-                    self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
-                }
-                continue;
+        for index in 0..self.lanes.len() {
+            // Taken out and put back, capacity and all: nothing allocates.
+            let mut events = std::mem::take(&mut self.lanes[index].events);
+            for e in events.drain(..) {
+                self.hand_over_event(index, e);
             }
-            // Full or gone, the event is lost: counted.
-            if self.sender.try_send(OutputMessage::Event(e)).is_err() {
+            self.lanes[index].events = events;
+        }
+    }
+
+    fn hand_over_event(&mut self, index: usize, e: Event) {
+        if !self.backlog.is_empty() {
+            if self.backlog.len() < BACKLOG {
+                self.backlog.push_back(OutputMessage::Event(index, e));
+            } else {
                 self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
             }
+            return;
+        }
+        // Full or gone, the event is lost: counted.
+        if self
+            .sender
+            .try_send(OutputMessage::Event(index, e))
+            .is_err()
+        {
+            self.status.dropped_events.fetch_add(1, Ordering::Relaxed);
         }
     }
 
@@ -186,7 +232,7 @@ impl DetectorStage {
         let lost = self
             .backlog
             .drain(..)
-            .filter(|m| matches!(m, OutputMessage::Event(_)))
+            .filter(|m| matches!(m, OutputMessage::Event(..)))
             .count();
         if lost > 0 {
             self.status
@@ -198,34 +244,69 @@ impl DetectorStage {
     /// The input ended: decide what is pending and hand it over.
     pub fn finish(&mut self) {
         while self.poll(true) > 0 {}
-        self.detector.finish(&mut self.events);
+        for lane in &mut self.lanes {
+            lane.detector.finish(&mut lane.events);
+        }
         self.hand_over();
     }
 
-    /// Swaps in a new detector (reload): it continues the stream's time and numbering.
-    pub fn replace_detector(&mut self, mut detector: Detector) {
-        detector.report_begins(true);
-        detector.continue_after(&self.detector);
-        self.bad_samples_before += self.detector.bad_samples();
-        self.status
-            .input_rate
-            .store(detector.input_rate(), Ordering::Relaxed);
-        self.detector = detector;
+    /// Swaps in new detectors (reload): `Some` for the performers whose detector
+    /// changed, each continuing its stream's time and numbering, and their held sounds
+    /// cut off; a different number of performers replaces them all (every one `Some`).
+    pub fn replace_detectors(&mut self, new: Vec<Option<LaneDetector>>) {
+        if new.len() == self.lanes.len() {
+            for (index, replacement) in new.into_iter().enumerate() {
+                if let Some(l) = replacement {
+                    self.swap_lane(index, l);
+                    // The new detector does not know the old one's held sounds: they end
+                    // here, after the old detector's events, before the new one's.
+                    self.send_control(OutputMessage::CutOffLane(index));
+                }
+            }
+            return;
+        }
+        let old = std::mem::take(&mut self.lanes);
+        for l in &old {
+            self.bad_samples_before += l.detector.bad_samples();
+        }
+        self.lanes = new
+            .into_iter()
+            .flatten()
+            .map(|mut l| {
+                l.detector.continue_after(&old[0].detector);
+                Lane::new(l, self.block_frames)
+            })
+            .collect();
+        self.send_control(OutputMessage::CutOff);
     }
 
-    /// Reads a new ring from now on (the capture was opened again), with a detector
-    /// for its rate. Stream time counts the audio received: the outage is not in it.
+    fn swap_lane(&mut self, index: usize, mut l: LaneDetector) {
+        let old = &self.lanes[index];
+        l.detector.continue_after(&old.detector);
+        self.bad_samples_before += old.detector.bad_samples();
+        self.status
+            .input_rate
+            .store(l.detector.input_rate(), Ordering::Relaxed);
+        self.lanes[index] = Lane::new(l, self.block_frames);
+    }
+
+    /// Reads a new ring from now on (the capture was opened again), with a detector per
+    /// performer for its rate. Stream time counts the audio received: the outage is not
+    /// in it.
     pub fn replace_input(
         &mut self,
         consumer: Consumer<f32>,
-        layout: FrameLayout,
-        detector: Detector,
+        channels: usize,
+        detectors: Vec<LaneDetector>,
     ) {
-        let channels = layout.channels.max(1);
+        let channels = channels.max(1);
         self.consumer = consumer;
-        self.layout = FrameLayout { channels, ..layout };
+        self.channels = channels;
         self.interleaved = vec![0.0; self.block_frames * channels];
-        self.replace_detector(detector);
+        for (index, l) in detectors.into_iter().enumerate().take(self.lanes.len()) {
+            self.swap_lane(index, l);
+        }
+        self.send_control(OutputMessage::CutOff);
     }
 }
 
@@ -257,11 +338,68 @@ enum Control {
 }
 
 enum DetectorCommand {
-    /// A reloaded configuration: a new detector when its patterns or settings changed,
-    /// and the output settings (the output thread rebuilds what changed).
-    Reload(Option<Box<Detector>>, Box<OutputSettings>),
-    /// The capture was opened again: a new ring (and layout) and a detector for its rate.
-    NewInput(Consumer<f32>, FrameLayout, Box<Detector>),
+    /// A reloaded configuration: a new detector for each performer whose patterns or
+    /// settings changed, and the output settings (the output thread rebuilds what
+    /// changed).
+    Reload(Vec<Option<LaneDetector>>, Box<OutputSettings>),
+    /// The capture was opened again: a new ring (its channels) and a detector per
+    /// performer for its rate.
+    NewInput(Consumer<f32>, usize, Vec<LaneDetector>),
+}
+
+/// Each performer's patterns, loaded (in the order of [`Config::lanes`]); an error
+/// names the performer.
+fn load_lane_patterns(config: &Config) -> anyhow::Result<Vec<Vec<Pattern>>> {
+    config
+        .lanes()
+        .iter()
+        .map(|(name, c)| {
+            pattern::load_patterns(&c.patterns, &c.detector).with_context(|| match name {
+                Some(n) => format!("performer '{n}'"),
+                None => "patterns".to_string(),
+            })
+        })
+        .collect()
+}
+
+/// A detector per performer at `rate`, from the loaded patterns.
+fn lane_detectors(
+    config: &Config,
+    patterns: &[Vec<Pattern>],
+    rate: u32,
+) -> anyhow::Result<Vec<LaneDetector>> {
+    config
+        .lanes()
+        .iter()
+        .zip(patterns)
+        .map(|((_, c), p)| {
+            Ok(LaneDetector {
+                detector: Detector::new(p.clone(), &c.detector, rate)?,
+                select: c
+                    .detector
+                    .channel
+                    .map_or(ChannelSelect::Mix, ChannelSelect::Index),
+            })
+        })
+        .collect()
+}
+
+/// Every performer's channel is one the input has.
+fn check_channels(config: &Config, channels: usize) -> anyhow::Result<()> {
+    for (name, c) in config.lanes() {
+        if let Some(ch) = c.detector.channel {
+            if usize::from(ch) >= channels {
+                let who = name.map_or("[detector] channel".to_string(), |n| {
+                    format!("performer '{n}'")
+                });
+                anyhow::bail!(
+                    "{who}: channel {ch} (counted from 0), but the input has {channels} channel{}",
+                    if channels == 1 { "" } else { "s" }
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 fn log_bad_samples(new: u64, total: u64) {
@@ -283,7 +421,6 @@ const REOPEN_EVERY: Duration = Duration::from_secs(2);
 /// The microphone, watched: opened again when it fails or stalls.
 struct Microphone {
     capture: Option<input::Capture>,
-    select: ChannelSelect,
     control: mpsc::Sender<Control>,
     status: Arc<Status>,
     /// Frames captured at the last check, and when that count last moved. The capture
@@ -299,20 +436,16 @@ impl Microphone {
     fn open(
         &mut self,
         config: &Config,
-    ) -> Result<(u32, FrameLayout, Consumer<f32>), input::CaptureError> {
+    ) -> Result<(u32, usize, Consumer<f32>), input::CaptureError> {
         let tx = self.control.clone();
         let (c, consumer) = input::open_capture(&config.input, self.status.clone(), move |f| {
             let _ = tx.send(Control::CaptureFault(f));
         })?;
         tracing::info!(device = %c.device, rate = c.rate, channels = c.channels, "capturing");
-        let layout = FrameLayout {
-            channels: usize::from(c.channels),
-            select: self.select,
-        };
-        let rate = c.rate;
+        let (rate, channels) = (c.rate, usize::from(c.channels));
         self.capture = Some(c);
         self.last_progress = std::time::Instant::now();
-        Ok((rate, layout, consumer))
+        Ok((rate, channels, consumer))
     }
 
     /// Drops a capture that failed or stalled; returns whether it did.
@@ -347,7 +480,7 @@ impl Microphone {
     }
 
     /// Tries to open the capture again when it is lost and an attempt is due.
-    fn reopen(&mut self, config: &Config) -> Option<(u32, FrameLayout, Consumer<f32>)> {
+    fn reopen(&mut self, config: &Config) -> Option<(u32, usize, Consumer<f32>)> {
         let now = std::time::Instant::now();
         if self.capture.is_some() || now < self.next_attempt {
             return None;
@@ -403,7 +536,7 @@ pub fn listen(
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 
     let mut config = load()?;
-    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let mut running_patterns = load_lane_patterns(&config)?;
     let status = Arc::new(Status::default());
     let (control_tx, control_rx) = mpsc::channel::<Control>();
 
@@ -427,40 +560,30 @@ pub fn listen(
 
     let stop = Arc::new(AtomicBool::new(false));
     let input_done = Arc::new(AtomicBool::new(false));
-    let select = config
-        .detector
-        .channel
-        .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let block_frames = config.input.buffer_frames as usize;
 
     // The source: a replayed file or the microphone.
     let mut microphone = None;
     let mut replay = None;
-    let (mut rate, layout, consumer) = match &options.input_file {
+    let (mut rate, channels, consumer) = match &options.input_file {
         Some(path) => {
             let (r, consumer) = input::spawn_replay(
                 path,
-                select,
                 block_frames,
                 options.speed,
                 options.repeat,
                 stop.clone(),
                 input_done.clone(),
             )?;
-            let rate = r.rate;
-            tracing::info!(file = %path.display(), rate, speed = options.speed, "replaying");
+            let (rate, channels) = (r.rate, usize::from(r.channels));
+            tracing::info!(file = %path.display(), rate, channels, speed = options.speed, "replaying");
             replay = Some(r);
-            let layout = FrameLayout {
-                channels: 1,
-                select: ChannelSelect::Mix,
-            };
-            (rate, layout, consumer)
+            (rate, channels, consumer)
         }
         None => {
             let now = std::time::Instant::now();
             let mut mic = Microphone {
                 capture: None,
-                select,
                 control: control_tx.clone(),
                 status: status.clone(),
                 last_position: 0,
@@ -474,9 +597,15 @@ pub fn listen(
         }
     };
 
-    let mut running_patterns = patterns.clone();
-    let detector = Detector::new(patterns, &config.detector, rate)?;
-    let mut running_delay = detector.decision_delay_bound();
+    if let Err(e) = check_channels(&config, channels) {
+        stop.store(true, Ordering::Release);
+        return Err(e);
+    }
+    let detectors = lane_detectors(&config, &running_patterns, rate)?;
+    let mut running_delays: Vec<f64> = detectors
+        .iter()
+        .map(|l| l.detector.decision_delay_bound())
+        .collect();
     let (out_tx, out_rx) = mpsc::sync_channel::<OutputMessage>(output::OUTPUT_QUEUE);
     let origin = SystemTime::now();
     // Bound before anything runs, so that a port in use is an error at start.
@@ -485,7 +614,7 @@ pub fn listen(
         None => None,
     };
     let output_thread = {
-        let settings = OutputSettings::from_config(&config, running_delay, options.print);
+        let settings = OutputSettings::from_config(&config, &running_delays, options.print);
         let status = status.clone();
         let hub = preview.as_ref().map(PreviewServer::hub);
         std::thread::Builder::new()
@@ -497,9 +626,9 @@ pub fn listen(
     let (command_tx, command_rx) = mpsc::channel::<DetectorCommand>();
     let detector_thread = {
         let mut stage = DetectorStage::new(
-            detector,
+            detectors,
             consumer,
-            layout,
+            channels,
             block_frames,
             out_tx.clone(),
             status.clone(),
@@ -524,7 +653,12 @@ pub fn listen(
     drop(out_tx);
     drop(control_tx);
 
-    tracing::info!(patterns = config.patterns.len(), rate, "listening");
+    tracing::info!(
+        patterns = running_patterns.iter().map(Vec::len).sum::<usize>(),
+        performers = config.performers.len(),
+        rate,
+        "listening"
+    );
     let mut failure: Option<&str> = None;
     let mut bad_logged = 0u64;
     let mut last_bad_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
@@ -541,7 +675,7 @@ pub fn listen(
                     load,
                     &config,
                     &running_patterns,
-                    running_delay,
+                    &running_delays,
                     rate,
                     options.print,
                 ) {
@@ -553,18 +687,20 @@ pub fn listen(
                         if new.preview != config.preview {
                             tracing::warn!("[preview] changed: restart the daemon to serve the preview elsewhere; keeping the running one");
                         }
-                        let detector = reload.detector.map(|(detector, patterns)| {
-                            running_patterns = patterns;
-                            running_delay = detector.decision_delay_bound();
-                            detector
-                        });
-                        let _ = command_tx.send(DetectorCommand::Reload(detector, reload.settings));
+                        running_patterns = reload.patterns;
+                        running_delays = reload.delays;
+                        let _ = command_tx
+                            .send(DetectorCommand::Reload(reload.detectors, reload.settings));
                         let changed = if reload.changed.is_empty() {
                             "nothing".to_string()
                         } else {
                             reload.changed.join(", ")
                         };
-                        tracing::info!(patterns = new.patterns.len(), %changed, "configuration reloaded");
+                        tracing::info!(
+                            patterns = running_patterns.iter().map(Vec::len).sum::<usize>(),
+                            %changed,
+                            "configuration reloaded"
+                        );
                         config = Config {
                             input: config.input.clone(),
                             preview: config.preview.clone(),
@@ -607,18 +743,14 @@ pub fn listen(
         }
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
-            if let Some((new_rate, layout, consumer)) = mic.reopen(&config) {
-                match pattern::load_patterns(&config.patterns, &config.detector)
-                    .map_err(anyhow::Error::from)
-                    .and_then(|p| Ok(Detector::new(p, &config.detector, new_rate)?))
+            if let Some((new_rate, channels, consumer)) = mic.reopen(&config) {
+                match check_channels(&config, channels)
+                    .and_then(|()| lane_detectors(&config, &running_patterns, new_rate))
                 {
-                    Ok(detector) => {
+                    Ok(detectors) => {
                         rate = new_rate;
-                        let _ = command_tx.send(DetectorCommand::NewInput(
-                            consumer,
-                            layout,
-                            Box::new(detector),
-                        ));
+                        let _ = command_tx
+                            .send(DetectorCommand::NewInput(consumer, channels, detectors));
                     }
                     Err(e) => tracing::error!("cannot restart detection on the new input: {e:#}"),
                 }
@@ -687,18 +819,12 @@ fn detector_loop(
             break;
         }
         match commands.try_recv() {
-            Ok(DetectorCommand::Reload(detector, settings)) => {
-                if let Some(detector) = detector {
-                    stage.replace_detector(*detector);
-                    // The new detector does not know the old one's held sounds: they
-                    // end here, after the old detector's events, before the new one's.
-                    stage.send_control(OutputMessage::CutOff);
-                }
+            Ok(DetectorCommand::Reload(detectors, settings)) => {
+                stage.replace_detectors(detectors);
                 stage.send_control(OutputMessage::Reconfigure(settings));
             }
-            Ok(DetectorCommand::NewInput(consumer, layout, detector)) => {
-                stage.replace_input(consumer, layout, *detector);
-                stage.send_control(OutputMessage::CutOff);
+            Ok(DetectorCommand::NewInput(consumer, channels, detectors)) => {
+                stage.replace_input(consumer, channels, detectors);
             }
             Err(_) => {}
         }
@@ -723,9 +849,12 @@ const STOP_WAIT: Duration = Duration::from_secs(2);
 /// A validated configuration to reload: what changed, and what to run it with.
 struct Reload {
     config: Config,
-    /// A new detector and its patterns, when the patterns (their takes' sound
-    /// included) or the detector's settings changed.
-    detector: Option<(Box<Detector>, Vec<Pattern>)>,
+    /// Each performer's patterns (their takes' sound included) and decision delay.
+    patterns: Vec<Vec<Pattern>>,
+    delays: Vec<f64>,
+    /// A new detector for each performer whose patterns or detector settings changed
+    /// (every one, when the performers themselves changed).
+    detectors: Vec<Option<LaneDetector>>,
     settings: Box<OutputSettings>,
     changed: Vec<&'static str>,
 }
@@ -735,37 +864,72 @@ struct Reload {
 fn prepare_reload(
     load: &dyn Fn() -> anyhow::Result<Config>,
     running: &Config,
-    running_patterns: &[Pattern],
-    running_delay: f64,
+    running_patterns: &[Vec<Pattern>],
+    running_delays: &[f64],
     rate: u32,
     print: PrintMode,
 ) -> anyhow::Result<Reload> {
     let config = load()?;
-    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let patterns = load_lane_patterns(&config)?;
+    let lanes = config.lanes();
+    let running_lanes = running.lanes();
+    let same_performers = lanes
+        .iter()
+        .map(|l| &l.0)
+        .eq(running_lanes.iter().map(|l| &l.0));
     let mut changed = Vec::new();
-    let detector = if patterns != running_patterns || config.detector != running.detector {
+    let mut detectors = Vec::with_capacity(lanes.len());
+    let mut delays = Vec::with_capacity(lanes.len());
+    for (i, ((_, c), p)) in lanes.iter().zip(&patterns).enumerate() {
+        let unchanged = same_performers
+            && running_patterns.get(i) == Some(p)
+            && running_lanes[i].1.detector == c.detector;
+        if unchanged {
+            detectors.push(None);
+            delays.push(running_delays[i]);
+        } else {
+            let detector = Detector::new(p.clone(), &c.detector, rate)?;
+            delays.push(detector.decision_delay_bound());
+            detectors.push(Some(LaneDetector {
+                detector,
+                select: c
+                    .detector
+                    .channel
+                    .map_or(ChannelSelect::Mix, ChannelSelect::Index),
+            }));
+        }
+    }
+    if !same_performers {
+        changed.push("performers");
+    } else if detectors.iter().any(Option::is_some) {
         changed.push("detector");
-        Some(Detector::new(patterns.clone(), &config.detector, rate)?)
-    } else {
-        None
-    };
-    let delay = detector
-        .as_ref()
-        .map_or(running_delay, Detector::decision_delay_bound);
-    let settings = OutputSettings::from_config(&config, delay, print);
-    let running_settings = OutputSettings::from_config(running, running_delay, print);
-    if settings.osc != running_settings.osc {
+    }
+    let settings = OutputSettings::from_config(&config, &delays, print);
+    let running_settings = OutputSettings::from_config(running, running_delays, print);
+    if settings
+        .lanes
+        .iter()
+        .map(|l| &l.osc)
+        .ne(running_settings.lanes.iter().map(|l| &l.osc))
+    {
         changed.push("osc");
     }
     if settings.midi != running_settings.midi {
         changed.push("midi");
     }
-    if settings.bounce != running_settings.bounce {
+    if settings
+        .lanes
+        .iter()
+        .map(|l| &l.bounce)
+        .ne(running_settings.lanes.iter().map(|l| &l.bounce))
+    {
         changed.push("bounce");
     }
     Ok(Reload {
         config,
-        detector: detector.map(|d| (Box::new(d), patterns)),
+        patterns,
+        delays,
+        detectors,
         settings: Box::new(settings),
         changed,
     })

@@ -41,21 +41,32 @@ pub enum PrintMode {
     None,
 }
 
-/// What the output thread sends where.
+/// What the output thread sends where: one lane per performer, and the MIDI port they
+/// share.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OutputSettings {
-    pub osc: Option<OscSettings>,
+    pub lanes: Vec<LaneSettings>,
+    /// The port's settings, and every lane's note mappings.
     pub midi: Option<(MidiSettings, Vec<NoteMapping>)>,
+    pub print: PrintMode,
+    /// Draw the bounce states for the preview page (at the OSC state rate, or 60 Hz).
+    pub preview: bool,
+}
+
+/// One performer's outputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaneSettings {
+    /// The performer's name; `None` without `[[performer]]` sections.
+    pub name: Option<String>,
+    /// With the performer's own prefix.
+    pub osc: Option<OscSettings>,
     /// The live bounce solver runs when set; its states are sent when OSC has a
     /// `bounce_state_rate`.
     pub bounce: Option<BounceSettings>,
     /// The detector's longest decision delay: the bounce states' default delay.
     pub decision_delay: f64,
-    pub print: PrintMode,
     /// The patterns (for the preview page's `hello`).
     pub patterns: Vec<(String, PatternKind)>,
-    /// Draw the bounce states for the preview page (at the OSC state rate, or 60 Hz).
-    pub preview: bool,
 }
 
 /// Bounce states drawn per second for the preview when OSC does not set a rate.
@@ -64,29 +75,45 @@ const PREVIEW_STATE_RATE: f64 = 60.0;
 const PREVIEW_STATUS_PERIOD: Duration = Duration::from_millis(100);
 
 impl OutputSettings {
-    /// The output thread's settings from a config; `decision_delay`: the detector's
-    /// [`crate::detect::Detector::decision_delay_bound`].
-    pub fn from_config(config: &Config, decision_delay: f64, print: PrintMode) -> Self {
-        Self {
-            osc: config.osc.clone(),
-            midi: config
-                .midi
-                .as_ref()
-                .map(|m| (m.clone(), midi::note_mappings(&config.patterns, m))),
-            bounce: (config.bounce.is_some()
-                || config.preview.is_some()
-                || config
-                    .osc
-                    .as_ref()
-                    .is_some_and(|o| o.bounce_state_rate.is_some()))
-            .then(|| config.bounce_or_default()),
-            decision_delay,
-            print,
-            patterns: config
-                .patterns
+    /// The output thread's settings from a config; `decision_delays`: each performer's
+    /// detector's [`crate::detect::Detector::decision_delay_bound`], in the order of
+    /// [`Config::lanes`].
+    pub fn from_config(config: &Config, decision_delays: &[f64], print: PrintMode) -> Self {
+        let lanes = config.lanes();
+        let lane_settings = lanes
+            .iter()
+            .zip(decision_delays)
+            .map(|((name, c), &decision_delay)| LaneSettings {
+                name: name.clone(),
+                osc: c.osc.clone(),
+                bounce: (c.bounce.is_some()
+                    || c.preview.is_some()
+                    || c.osc
+                        .as_ref()
+                        .is_some_and(|o| o.bounce_state_rate.is_some()))
+                .then(|| c.bounce_or_default()),
+                decision_delay,
+                patterns: c
+                    .patterns
+                    .iter()
+                    .map(|p| (p.name.clone(), p.kind))
+                    .collect(),
+            })
+            .collect();
+        let midi = config.midi.as_ref().map(|m| {
+            let notes = lanes
                 .iter()
-                .map(|p| (p.name.clone(), p.kind))
-                .collect(),
+                .enumerate()
+                .flat_map(|(lane, (_, c))| {
+                    midi::note_mappings(lane, &c.patterns, c.midi.as_ref().unwrap_or(m))
+                })
+                .collect();
+            (m.clone(), notes)
+        });
+        Self {
+            lanes: lane_settings,
+            midi,
+            print,
             preview: config.preview.is_some(),
         }
     }
@@ -95,11 +122,14 @@ impl OutputSettings {
 /// Messages to the output thread.
 #[derive(Debug)]
 pub enum OutputMessage {
-    Event(Event),
+    /// An event of the performer (lane) with this index.
+    Event(usize, Event),
     /// New settings (reload): only the sinks whose settings changed are made again.
     Reconfigure(Box<OutputSettings>),
-    /// Cut off held sounds and release every note (the input changed).
+    /// Cut off every held sound and release every note (the input changed).
     CutOff,
+    /// Cut off the held sounds and notes of one performer (its detector was replaced).
+    CutOffLane(usize),
     /// Cut off held sounds, release every note, and end the thread.
     Stop,
 }
@@ -118,12 +148,11 @@ pub struct OutputReport {
     pub preview_closed: u64,
 }
 
-struct Sinks {
+/// One performer's sinks.
+struct Lane {
     /// The settings the sinks were made from, to reload by difference.
-    settings: OutputSettings,
-    origin: SystemTime,
+    settings: LaneSettings,
     osc: Option<OscSink>,
-    midi: Option<MidiSink>,
     bounce: Option<LiveBounce>,
     state_delay: f64,
     heartbeat: Option<Duration>,
@@ -131,44 +160,50 @@ struct Sinks {
     state_period: Option<f64>,
     /// Drawn states go to OSC (`bounce_state_rate` is set).
     osc_states: bool,
+    /// Continuous events whose begin was sent and whose end was not.
+    open: Vec<Event>,
+    /// Sounds sent (impulses, held sounds once).
+    events: u64,
 }
 
-fn state_rate(s: &OutputSettings) -> Option<f64> {
+fn state_rate(s: &LaneSettings) -> Option<f64> {
     s.osc.as_ref().and_then(|o| o.bounce_state_rate)
 }
 
 /// The rate states are drawn at: OSC's, else the preview's; `None`: no states.
-fn drawn_state_rate(s: &OutputSettings) -> Option<f64> {
-    state_rate(s).or(s.preview.then_some(PREVIEW_STATE_RATE))
+fn drawn_state_rate(s: &LaneSettings, preview: bool) -> Option<f64> {
+    state_rate(s).or(preview.then_some(PREVIEW_STATE_RATE))
 }
 
-fn new_bounce(s: &OutputSettings) -> Option<LiveBounce> {
-    s.bounce
-        .as_ref()
-        .map(|b| LiveBounce::new(b, drawn_state_rate(s).unwrap_or(PREVIEW_STATE_RATE)))
-}
-
-impl Sinks {
-    fn new(s: &OutputSettings, origin: SystemTime) -> Self {
-        let mut sinks = Self {
+impl Lane {
+    fn new(s: &LaneSettings, origin: SystemTime, preview: bool) -> Self {
+        let mut lane = Self {
             settings: s.clone(),
-            origin,
             osc: s.osc.as_ref().map(|o| OscSink::new(o, origin)),
-            midi: s
-                .midi
-                .as_ref()
-                .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone())),
-            bounce: new_bounce(s),
+            bounce: None,
             state_delay: 0.0,
             heartbeat: None,
             state_period: None,
             osc_states: false,
+            open: Vec::with_capacity(16),
+            events: 0,
         };
-        sinks.derive_timing();
-        sinks
+        lane.bounce = lane.new_bounce(preview);
+        lane.derive_timing(preview);
+        lane
     }
 
-    fn derive_timing(&mut self) {
+    fn new_bounce(&self, preview: bool) -> Option<LiveBounce> {
+        let s = &self.settings;
+        s.bounce.as_ref().map(|b| {
+            LiveBounce::new(
+                b,
+                drawn_state_rate(s, preview).unwrap_or(PREVIEW_STATE_RATE),
+            )
+        })
+    }
+
+    fn derive_timing(&mut self, preview: bool) {
         let s = &self.settings;
         self.state_delay = s
             .bounce
@@ -180,59 +215,38 @@ impl Sinks {
             .as_ref()
             .and_then(|o| o.heartbeat_seconds)
             .map(Duration::from_secs_f64);
-        self.state_period = drawn_state_rate(s).map(|r| 1.0 / r);
+        self.state_period = drawn_state_rate(s, preview).map(|r| 1.0 / r);
         self.osc_states = state_rate(s).is_some();
     }
 
-    /// Reload by difference: rebuilds only the sinks whose settings changed, so that a
-    /// new OSC target keeps the MIDI port (and the connections a DAW made to it) and
-    /// the held sounds, and new note mappings keep the port open. Returns what changed.
-    /// The counters of a sink that is replaced go into `report`.
+    /// Reload by difference: a new OSC target keeps the bounce solver and the held
+    /// sounds; the counters of a sink that is replaced go into `report`.
     fn reconfigure(
         &mut self,
-        new: &OutputSettings,
+        new: &LaneSettings,
+        preview: bool,
         report: &mut OutputReport,
-    ) -> Vec<&'static str> {
-        let mut changed = Vec::new();
+        origin: SystemTime,
+        changed: &mut Vec<&'static str>,
+    ) {
         let old = std::mem::replace(&mut self.settings, new.clone());
         if new.osc != old.osc {
             if let Some(o) = &self.osc {
                 add_osc(report, o.counters());
             }
-            self.osc = new.osc.as_ref().map(|o| OscSink::new(o, self.origin));
+            self.osc = new.osc.as_ref().map(|o| OscSink::new(o, origin));
             changed.push("osc");
         }
-        match (&new.midi, self.midi.as_mut(), &old.midi) {
-            (Some((m, notes)), Some(sink), Some((old_m, old_notes)))
-                if m.port == old_m.port && (m != old_m || notes != old_notes) =>
-            {
-                // The notes that are on were started under the old mapping.
-                sink.update(m.clone(), notes.clone());
-                changed.push("midi notes");
-            }
-            (Some((m, _)), Some(_), Some((old_m, _))) if m.port == old_m.port => {}
-            _ if new.midi != old.midi => {
-                if let Some(m) = &self.midi {
-                    add_midi(report, m.counters());
-                }
-                // Dropping the old sink releases its notes.
-                self.midi = new
-                    .midi
-                    .as_ref()
-                    .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone()));
-                changed.push("midi port");
-            }
-            _ => {}
-        }
-        if new.bounce != old.bounce || drawn_state_rate(new) != drawn_state_rate(&old) {
+        if new.bounce != old.bounce
+            || drawn_state_rate(new, preview) != drawn_state_rate(&old, preview)
+        {
             if let Some(b) = &self.bounce {
                 report.late_bounce_hits += b.late_hits();
             }
-            self.bounce = new_bounce(new);
+            self.bounce = self.new_bounce(preview);
             changed.push("bounce");
         }
-        self.derive_timing();
-        changed
+        self.derive_timing(preview);
     }
 
     /// States are drawn when OSC asks for them (`bounce_state_rate`, which only an
@@ -242,8 +256,8 @@ impl Sinks {
     }
 
     /// Draws the bounce states up to stream time `until` and sends them where they go.
-    fn draw_states(&mut self, until: f64, preview: Option<&PreviewHub>) {
-        let Sinks {
+    fn draw_states(&mut self, until: f64, lane: usize, preview: Option<&PreviewHub>) {
+        let Lane {
             bounce,
             osc,
             osc_states,
@@ -260,36 +274,141 @@ impl Sinks {
                 }
             }
             if let Some(p) = preview {
-                p.publish("state", &state_json(&s));
+                p.publish("state", &state_json(lane, &s));
             }
         });
     }
 }
 
-/// The preview's `hello`: the patterns, and the wall-clock time of stream time 0.
+struct Sinks {
+    lanes: Vec<Lane>,
+    /// The port all performers share; each lane's notes on its own channel.
+    midi: Option<MidiSink>,
+    midi_settings: Option<(MidiSettings, Vec<NoteMapping>)>,
+    preview: bool,
+    origin: SystemTime,
+}
+
+impl Sinks {
+    fn new(s: &OutputSettings, origin: SystemTime) -> Self {
+        Self {
+            lanes: s
+                .lanes
+                .iter()
+                .map(|l| Lane::new(l, origin, s.preview))
+                .collect(),
+            midi: s
+                .midi
+                .as_ref()
+                .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone())),
+            midi_settings: s.midi.clone(),
+            preview: s.preview,
+            origin,
+        }
+    }
+
+    /// Reload by difference: rebuilds only the sinks whose settings changed, so that a
+    /// new OSC target keeps the MIDI port (and the connections a DAW made to it) and
+    /// the held sounds, and new note mappings keep the port open. A different set of
+    /// performers makes every lane again (their held sounds were cut off before).
+    /// Returns what changed. The counters of a sink that is replaced go into `report`.
+    fn reconfigure(
+        &mut self,
+        new: &OutputSettings,
+        report: &mut OutputReport,
+    ) -> Vec<&'static str> {
+        let mut changed = Vec::new();
+        let names = |l: &[LaneSettings]| l.iter().map(|l| l.name.clone()).collect::<Vec<_>>();
+        let old_names: Vec<Option<String>> =
+            self.lanes.iter().map(|l| l.settings.name.clone()).collect();
+        if names(&new.lanes) == old_names {
+            for (lane, s) in self.lanes.iter_mut().zip(&new.lanes) {
+                lane.reconfigure(s, new.preview, report, self.origin, &mut changed);
+            }
+        } else {
+            for lane in &self.lanes {
+                collect_lane(lane, report);
+            }
+            self.lanes = new
+                .lanes
+                .iter()
+                .map(|l| Lane::new(l, self.origin, new.preview))
+                .collect();
+            changed.push("performers");
+        }
+        self.preview = new.preview;
+        match (&new.midi, self.midi.as_mut(), &self.midi_settings) {
+            (Some((m, notes)), Some(sink), Some((old_m, old_notes)))
+                if m.port == old_m.port && (m != old_m || notes != old_notes) =>
+            {
+                // The notes that are on were started under the old mapping.
+                sink.update(m.clone(), notes.clone());
+                changed.push("midi notes");
+            }
+            (Some((m, _)), Some(_), Some((old_m, _))) if m.port == old_m.port => {}
+            _ if new.midi != self.midi_settings => {
+                if let Some(m) = &self.midi {
+                    add_midi(report, m.counters());
+                }
+                // Dropping the old sink releases its notes.
+                self.midi = new
+                    .midi
+                    .as_ref()
+                    .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone()));
+                changed.push("midi port");
+            }
+            _ => {}
+        }
+        self.midi_settings = new.midi.clone();
+        changed.sort_unstable();
+        changed.dedup();
+        changed
+    }
+}
+
+/// The preview's `hello`: the performers and their patterns, and the wall-clock time of
+/// stream time 0.
 fn hello_json(s: &OutputSettings, origin: SystemTime) -> String {
-    let patterns: Vec<serde_json::Value> = s
-        .patterns
+    let performers: Vec<serde_json::Value> = s
+        .lanes
         .iter()
-        .map(|(name, kind)| serde_json::json!({ "name": name, "kind": kind }))
+        .map(|l| {
+            let patterns: Vec<serde_json::Value> = l
+                .patterns
+                .iter()
+                .map(|(name, kind)| serde_json::json!({ "name": name, "kind": kind }))
+                .collect();
+            serde_json::json!({
+                "name": l.name,
+                "patterns": patterns,
+                "bounce": l.bounce.is_some(),
+                "osc_prefix": l.osc.as_ref().map(|o| o.prefix.clone()),
+            })
+        })
         .collect();
     let origin = origin
         .duration_since(SystemTime::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64());
     serde_json::json!({
-        "patterns": patterns,
-        "bounce": s.bounce.is_some(),
+        "performers": performers,
         "origin_unix_seconds": origin,
     })
     .to_string()
 }
 
-fn state_json(s: &BounceState) -> String {
-    serde_json::json!({ "time": s.time, "height": s.height, "velocity": s.velocity }).to_string()
+fn state_json(lane: usize, s: &BounceState) -> String {
+    serde_json::json!({
+        "performer": lane,
+        "time": s.time,
+        "height": s.height,
+        "velocity": s.velocity,
+    })
+    .to_string()
 }
 
-fn hit_json(h: &LiveHit) -> String {
+fn hit_json(lane: usize, h: &LiveHit) -> String {
     serde_json::json!({
+        "performer": lane,
         "event": h.event,
         "time": h.time,
         "launch_velocity": h.launch_velocity,
@@ -300,10 +419,12 @@ fn hit_json(h: &LiveHit) -> String {
     .to_string()
 }
 
-fn publish_sound(preview: Option<&PreviewHub>, e: &Event) {
+/// The event record, with the index of its performer.
+fn publish_sound(preview: Option<&PreviewHub>, lane: usize, e: &Event) {
     if let Some(p) = preview.filter(|p| p.watched()) {
-        if let Ok(json) = serde_json::to_string(e) {
-            p.publish("sound", &json);
+        if let Ok(serde_json::Value::Object(mut record)) = serde_json::to_value(e) {
+            record.insert("performer".into(), lane.into());
+            p.publish("sound", &serde_json::Value::Object(record).to_string());
         }
     }
 }
@@ -325,8 +446,6 @@ pub fn run(
     }
     let mut next_preview_status = Instant::now();
     let mut report = OutputReport::default();
-    // Continuous events whose begin was sent and whose end was not.
-    let mut open: Vec<Event> = Vec::with_capacity(16);
     let mut next_heartbeat = Instant::now();
     // In a terminal, a compact input level under the printed events.
     let meter = {
@@ -344,11 +463,11 @@ pub fn run(
         if let Some(t) = sinks.midi.as_ref().and_then(MidiSink::next_deadline) {
             wake = wake.min(t);
         }
-        if sinks.heartbeat.is_some() {
+        if sinks.lanes.iter().any(|l| l.heartbeat.is_some()) {
             wake = wake.min(next_heartbeat);
         }
-        if sinks.states_wanted() {
-            let period = sinks.state_period.unwrap_or(0.25).min(0.25);
+        for lane in sinks.lanes.iter().filter(|l| l.states_wanted()) {
+            let period = lane.state_period.unwrap_or(0.25).min(0.25);
             wake = wake.min(now + Duration::from_secs_f64(period));
         }
         if preview.is_some() {
@@ -356,51 +475,55 @@ pub fn run(
         }
         let message = rx.recv_timeout(wake.saturating_duration_since(now));
         match message {
-            Ok(OutputMessage::Event(e)) => {
+            Ok(OutputMessage::Event(index, e)) => {
+                let Some(lane) = sinks.lanes.get_mut(index) else {
+                    continue;
+                };
                 let ends_an_open_sound = e.kind == PatternKind::Continuous
                     && e.end.is_some()
-                    && open.iter().any(|o| o.id == e.id);
+                    && lane.open.iter().any(|o| o.id == e.id);
                 if !ends_an_open_sound {
                     report.events += 1;
+                    lane.events += 1;
                 }
                 let begin_sent = match (e.kind, e.end) {
                     (PatternKind::Continuous, None) => {
-                        open.push(e.clone());
+                        lane.open.push(e.clone());
                         false
                     }
                     (PatternKind::Continuous, Some(_)) => {
-                        let was = open.iter().position(|o| o.id == e.id);
+                        let was = lane.open.iter().position(|o| o.id == e.id);
                         if let Some(i) = was {
-                            open.swap_remove(i);
+                            lane.open.swap_remove(i);
                         }
                         was.is_some()
                     }
                     _ => false,
                 };
-                if let Some(o) = sinks.osc.as_mut() {
+                if let Some(o) = lane.osc.as_mut() {
                     o.send_event(&e, begin_sent);
                 }
                 if let Some(m) = sinks.midi.as_mut() {
-                    m.play(&e, Instant::now());
+                    m.play(index, &e, Instant::now());
                 }
-                printer.event(&e, begin_sent);
-                publish_sound(preview, &e);
-                if let Some(b) = sinks.bounce.as_mut() {
+                printer.event(lane.settings.name.as_deref(), &e, begin_sent);
+                publish_sound(preview, index, &e);
+                if let Some(b) = lane.bounce.as_mut() {
                     let late = b.late_hits();
                     let hit = b.on_event(&e);
                     if b.late_hits() > late && late % 100 == 0 {
                         tracing::warn!(
                             late_hits = b.late_hits(),
-                            delay = sinks.state_delay,
+                            delay = lane.state_delay,
                             "a hit was decided after the bounce states had passed it; raise [bounce] state_delay_seconds"
                         );
                     }
                     if let Some(hit) = hit {
-                        if let Some(o) = sinks.osc.as_mut() {
+                        if let Some(o) = lane.osc.as_mut() {
                             o.send_bounce_hit(&hit);
                         }
                         if let Some(p) = preview {
-                            p.publish("hit", &hit_json(&hit));
+                            p.publish("hit", &hit_json(index, &hit));
                         }
                     }
                 }
@@ -415,14 +538,29 @@ pub fn run(
                 }
             }
             Ok(OutputMessage::CutOff) => {
-                cut_off(&mut sinks, &mut open, status.stream_seconds(), preview);
+                for lane in 0..sinks.lanes.len() {
+                    cut_off(&mut sinks, lane, status.stream_seconds(), preview);
+                }
+                if let Some(m) = sinks.midi.as_mut() {
+                    m.release_all();
+                }
+            }
+            Ok(OutputMessage::CutOffLane(lane)) => {
+                cut_off(&mut sinks, lane, status.stream_seconds(), preview);
             }
             Ok(OutputMessage::Stop) | Err(RecvTimeoutError::Disconnected) => {
-                // The states the delay held back, up to the end of the stream.
-                if sinks.states_wanted() {
-                    sinks.draw_states(status.stream_seconds(), preview);
+                let end = status.stream_seconds();
+                for index in 0..sinks.lanes.len() {
+                    // The states the delay held back, up to the end of the stream.
+                    let lane = &mut sinks.lanes[index];
+                    if lane.states_wanted() {
+                        lane.draw_states(end, index, preview);
+                    }
+                    cut_off(&mut sinks, index, end, preview);
                 }
-                cut_off(&mut sinks, &mut open, status.stream_seconds(), preview);
+                if let Some(m) = sinks.midi.as_mut() {
+                    m.release_all();
+                }
                 collect(&sinks, &mut report);
                 report.print_dropped = printer.finish();
                 report.preview_closed = preview.map_or(0, PreviewHub::closed_slow);
@@ -438,22 +576,28 @@ pub fn run(
         if let Some(m) = sinks.midi.as_mut() {
             m.release_due(now);
         }
-        if let Some(period) = sinks.heartbeat {
-            if now >= next_heartbeat {
+        if now >= next_heartbeat {
+            // Every lane's own period, which a reload may change: the shortest rules.
+            if let Some(period) = sinks.lanes.iter().filter_map(|l| l.heartbeat).min() {
                 next_heartbeat = now + period;
-                if let Some(o) = sinks.osc.as_mut() {
-                    o.send_status(
-                        status.stream_seconds(),
-                        report.events,
-                        status.dropped_events(),
-                        status.overrun_samples(),
-                        status.level_db(),
-                    );
+                for lane in &mut sinks.lanes {
+                    if let (Some(o), Some(_)) = (lane.osc.as_mut(), lane.heartbeat) {
+                        o.send_status(
+                            status.stream_seconds(),
+                            lane.events,
+                            status.dropped_events(),
+                            status.overrun_samples(),
+                            status.level_db(),
+                        );
+                    }
                 }
             }
         }
-        if sinks.states_wanted() {
-            sinks.draw_states(status.stream_seconds() - sinks.state_delay, preview);
+        for (index, lane) in sinks.lanes.iter_mut().enumerate() {
+            if lane.states_wanted() {
+                let until = status.stream_seconds() - lane.state_delay;
+                lane.draw_states(until, index, preview);
+            }
         }
         if let Some(p) = preview {
             if now >= next_preview_status {
@@ -466,8 +610,24 @@ pub fn run(
     }
 }
 
-/// The counters of `/status`, and the others the daemon keeps, for the preview.
+/// The counters of `/status`, and the others the daemon keeps, for the preview; the
+/// events of each performer, and each one's input level.
 fn status_json(status: &Status, report: &OutputReport, sinks: &Sinks, p: &PreviewHub) -> String {
+    let late: u64 = report.late_bounce_hits
+        + sinks
+            .lanes
+            .iter()
+            .filter_map(|l| l.bounce.as_ref())
+            .map(LiveBounce::late_hits)
+            .sum::<u64>();
+    let lanes: Vec<serde_json::Value> = sinks
+        .lanes
+        .iter()
+        .enumerate()
+        .map(
+            |(i, l)| serde_json::json!({ "events": l.events, "level_db": status.lane_level_db(i) }),
+        )
+        .collect();
     serde_json::json!({
         "stream_seconds": status.stream_seconds(),
         "events": report.events,
@@ -476,28 +636,33 @@ fn status_json(status: &Status, report: &OutputReport, sinks: &Sinks, p: &Previe
         "level_db": status.level_db(),
         "bad_samples": status.bad_samples(),
         "xruns": status.xruns(),
-        "late_bounce_hits": report.late_bounce_hits + sinks.bounce.as_ref().map_or(0, LiveBounce::late_hits),
+        "late_bounce_hits": late,
         "preview_closed": p.closed_slow(),
+        "performers": lanes,
     })
     .to_string()
 }
 
-/// Ends every open continuous event at stream time `at` and releases every note.
-fn cut_off(sinks: &mut Sinks, open: &mut Vec<Event>, at: f64, preview: Option<&PreviewHub>) {
-    for mut e in open.drain(..) {
-        tracing::info!(pattern = %e.pattern, id = e.id, "held sound cut off");
+/// Ends every open continuous event of performer `index` at stream time `at` and
+/// releases its notes.
+fn cut_off(sinks: &mut Sinks, index: usize, at: f64, preview: Option<&PreviewHub>) {
+    let Some(lane) = sinks.lanes.get_mut(index) else {
+        return;
+    };
+    for mut e in lane.open.drain(..) {
+        tracing::info!(performer = lane.settings.name.as_deref().unwrap_or(""), pattern = %e.pattern, id = e.id, "held sound cut off");
         // Its end, sent as the `/end` of the begin that was sent.
         e.end = Some(at.max(e.time));
-        if let Some(o) = sinks.osc.as_mut() {
+        if let Some(o) = lane.osc.as_mut() {
             o.send_event(&e, true);
         }
-        publish_sound(preview, &e);
+        publish_sound(preview, index, &e);
         if let Some(m) = sinks.midi.as_mut() {
-            m.release_event(e.id);
+            m.release_event(index, e.id);
         }
     }
     if let Some(m) = sinks.midi.as_mut() {
-        m.release_all();
+        m.release_lane(index);
     }
 }
 
@@ -514,14 +679,20 @@ fn add_midi(report: &mut OutputReport, c: midi::MidiCounters) {
     report.midi.server_xruns += c.server_xruns;
 }
 
-fn collect(sinks: &Sinks, report: &mut OutputReport) {
-    if let Some(o) = &sinks.osc {
+fn collect_lane(lane: &Lane, report: &mut OutputReport) {
+    if let Some(o) = &lane.osc {
         add_osc(report, o.counters());
+    }
+    if let Some(b) = &lane.bounce {
+        report.late_bounce_hits += b.late_hits();
+    }
+}
+
+fn collect(sinks: &Sinks, report: &mut OutputReport) {
+    for lane in &sinks.lanes {
+        collect_lane(lane, report);
     }
     if let Some(m) = &sinks.midi {
         add_midi(report, m.counters());
-    }
-    if let Some(b) = &sinks.bounce {
-        report.late_bounce_hits += b.late_hits();
     }
 }

@@ -75,8 +75,9 @@ impl Printer {
     }
 
     /// Prints one event, unless the queue is full: then it is counted as dropped.
-    pub fn event(&mut self, e: &Event, begin_sent: bool) {
-        let Some(line) = format_event(e, begin_sent, self.mode) else {
+    /// Prints one event; `performer`: its performer's name, with `[[performer]]`s.
+    pub fn event(&mut self, performer: Option<&str>, e: &Event, begin_sent: bool) {
+        let Some(line) = format_event(performer, e, begin_sent, self.mode) else {
             return;
         };
         let Some(tx) = &self.tx else { return };
@@ -183,10 +184,26 @@ fn clear_meter() {
 }
 
 /// One event as its printed line (with its newline); `None` when nothing is printed.
-pub fn format_event(e: &Event, begin_sent: bool, mode: PrintMode) -> Option<String> {
+pub fn format_event(
+    performer: Option<&str>,
+    e: &Event,
+    begin_sent: bool,
+    mode: PrintMode,
+) -> Option<String> {
     match mode {
         PrintMode::None => None,
-        PrintMode::Json => serde_json::to_string(e).ok().map(|l| l + "\n"),
+        // The event record, with the performer's name when there are performers.
+        PrintMode::Json => match performer {
+            None => serde_json::to_string(e).ok(),
+            Some(name) => match serde_json::to_value(e) {
+                Ok(serde_json::Value::Object(mut record)) => {
+                    record.insert("performer".into(), name.into());
+                    serde_json::to_string(&record).ok()
+                }
+                _ => None,
+            },
+        }
+        .map(|l| l + "\n"),
         PrintMode::Text => {
             let (at, phase, held) = match (e.kind, e.end) {
                 (PatternKind::Impulse, _) => (e.time, "impulse", String::new()),
@@ -203,8 +220,9 @@ pub fn format_event(e: &Event, begin_sent: bool, mode: PrintMode) -> Option<Stri
                 .pitch
                 .map(|p| format!("  pitch {p:.0} Hz"))
                 .unwrap_or_default();
+            let who = performer.map(|p| format!("{p:<8} ")).unwrap_or_default();
             Some(format!(
-                "{at:9.3} s  {:<10} {phase:<8} strength {:.2}  score {:.2}  #{:<4} decided at {:.3} s{held}{pitch}\n",
+                "{at:9.3} s  {who}{:<10} {phase:<8} strength {:.2}  score {:.2}  #{:<4} decided at {:.3} s{held}{pitch}\n",
                 e.pattern, e.strength, e.score, e.id, e.emitted_at
             ))
         }
@@ -268,12 +286,12 @@ mod tests {
         let mut printer = Printer::start(PrintMode::Json, false, 4, out.clone());
         // The thread takes one line and blocks in its write; four more fill the queue;
         // the other five are dropped, and none of the ten calls waits.
-        printer.event(&event(0), false);
+        printer.event(None, &event(0), false);
         while !out.writing.load(Ordering::Acquire) {
             std::thread::sleep(Duration::from_millis(1));
         }
         for id in 1..10 {
-            printer.event(&event(id), false);
+            printer.event(None, &event(id), false);
         }
         assert_eq!(printer.dropped(), 5);
         out.open.store(true, Ordering::Release);
@@ -294,7 +312,7 @@ mod tests {
     fn the_stop_does_not_wait_for_a_reader_that_never_comes_back() {
         let mut printer = Printer::start(PrintMode::Text, false, 8, StalledOut::new());
         for id in 0..3 {
-            printer.event(&event(id), false);
+            printer.event(None, &event(id), false);
         }
         // Three lines never written: one in the blocked write, two queued.
         assert_eq!(printer.finish_within(Duration::from_millis(50)), 3);

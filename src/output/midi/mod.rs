@@ -42,19 +42,27 @@ const RECENT_OFFS: Duration = Duration::from_secs(2);
 /// Where a pattern's notes go.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NoteMapping {
+    /// The performer (lane) whose pattern it is.
+    pub lane: usize,
     pub pattern: String,
     pub note: u8,
     /// 1-16.
     pub channel: u8,
 }
 
-/// The note of each pattern: its own, or 36 plus its position (General MIDI drums from
-/// the bass drum up); its channel, or the `[midi]` channel.
-pub fn note_mappings(patterns: &[PatternSpec], midi: &MidiSettings) -> Vec<NoteMapping> {
+/// The note of each pattern of performer `lane`: its own, or 36 plus its position
+/// (General MIDI drums from the bass drum up); its channel, or the `[midi]` channel
+/// (the performer's).
+pub fn note_mappings(
+    lane: usize,
+    patterns: &[PatternSpec],
+    midi: &MidiSettings,
+) -> Vec<NoteMapping> {
     patterns
         .iter()
         .enumerate()
         .map(|(i, p)| NoteMapping {
+            lane,
             pattern: p.name.clone(),
             note: p.note.unwrap_or((36 + i).min(127) as u8),
             channel: p.midi_channel.unwrap_or(midi.channel),
@@ -66,8 +74,8 @@ pub fn note_mappings(patterns: &[PatternSpec], midi: &MidiSettings) -> Vec<NoteM
 struct SoundingNote {
     note: u8,
     channel: u8,
-    /// Event that started it.
-    event: u64,
+    /// Performer (lane) and event that started it.
+    event: (usize, u64),
     /// When an impulse's gate closes; `None` for a held note.
     off_at: Option<Instant>,
     /// Whether its note-on left (no port, no note-off).
@@ -94,8 +102,9 @@ pub struct MidiSink {
     connection: Option<Connection>,
     next_connect: Instant,
     sounding: Vec<SoundingNote>,
-    /// Held sounds whose note a reload released: their end plays nothing.
-    released_held: Vec<u64>,
+    /// Held sounds (performer, event) whose note a reload released: their end plays
+    /// nothing.
+    released_held: Vec<(usize, u64)>,
     /// Note-offs (note, channel) of notes that went on and could not be released:
     /// sent first when a port is open again.
     owed_offs: Vec<(u8, u8)>,
@@ -242,8 +251,13 @@ impl MidiSink {
     }
 
     /// Plays one event (impulse, begin marker or complete continuous event).
-    pub fn play(&mut self, e: &Event, now: Instant) {
-        let Some(m) = self.mappings.iter().find(|m| *m.pattern == *e.pattern) else {
+    /// Plays an event of performer `lane`.
+    pub fn play(&mut self, lane: usize, e: &Event, now: Instant) {
+        let Some(m) = self
+            .mappings
+            .iter()
+            .find(|m| m.lane == lane && *m.pattern == *e.pattern)
+        else {
             return;
         };
         let (note, channel) = (m.note, m.channel);
@@ -251,13 +265,13 @@ impl MidiSink {
         let gate = Some(now + Duration::from_secs_f64(self.settings.gate_seconds));
         match (e.kind, e.end) {
             (PatternKind::Impulse, _) => {
-                self.start_note(note, channel, velocity, e.id, gate, false)
+                self.start_note(note, channel, velocity, (lane, e.id), gate, false)
             }
             (PatternKind::Continuous, None) => {
-                self.start_note(note, channel, velocity, e.id, None, true)
+                self.start_note(note, channel, velocity, (lane, e.id), None, true)
             }
             (PatternKind::Continuous, Some(_)) => {
-                let id = e.id;
+                let id = (lane, e.id);
                 if let Some(i) = self.released_held.iter().position(|&r| r == id) {
                     self.released_held.swap_remove(i);
                 } else if self.sounding.iter().any(|s| s.event == id) {
@@ -278,7 +292,7 @@ impl MidiSink {
         note: u8,
         channel: u8,
         velocity: u8,
-        event: u64,
+        event: (usize, u64),
         off_at: Option<Instant>,
         held: bool,
     ) {
@@ -342,9 +356,14 @@ impl MidiSink {
         self.release_matching(|_| true);
     }
 
-    /// Releases the held note of one continuous event, if it is on.
-    pub fn release_event(&mut self, id: u64) {
-        self.release_matching(|s| s.event == id);
+    /// Releases the held note of one continuous event of performer `lane`, if it is on.
+    pub fn release_event(&mut self, lane: usize, id: u64) {
+        self.release_matching(|s| s.event == (lane, id));
+    }
+
+    /// Releases every note of performer `lane` (its detector was replaced).
+    pub fn release_lane(&mut self, lane: usize) {
+        self.release_matching(|s| s.event.0 == lane);
     }
 }
 
