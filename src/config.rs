@@ -949,7 +949,12 @@ fn validate_performers(
         });
         check_osc_prefix(&osc_prefix).map_err(|m| invalid(&item, format!("osc_prefix: {m}")))?;
         if let Some(c) = p.midi_channel {
-            check_channel(&item, c)?;
+            check_channel(&item, c).map_err(|_| {
+                invalid(
+                    &item,
+                    format!("midi_channel must be a MIDI channel from 1 to 16, found {c}"),
+                )
+            })?;
         }
         if p.pattern.is_empty() {
             return Err(invalid(

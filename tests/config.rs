@@ -345,3 +345,103 @@ fn the_preview_section_defaults_to_loopback_and_refuses_what_is_not_an_address()
         assert!(msg.contains(want), "{text:?}: {msg}");
     }
 }
+
+#[test]
+fn the_two_performer_config_loads_with_each_performers_patterns_and_outputs() {
+    let config = Config::load(Path::new("config/duo.toml")).unwrap();
+    assert!(config.patterns.is_empty());
+    let lanes = config.lanes();
+    let names: Vec<Option<&str>> = lanes.iter().map(|l| l.0.as_deref()).collect();
+    assert_eq!(names, [Some("shooter"), Some("runner")]);
+    let (shooter, runner) = (&lanes[0].1, &lanes[1].1);
+    assert_eq!(shooter.detector.channel, Some(0));
+    assert_eq!(runner.detector.channel, Some(1));
+    assert_eq!(shooter.osc.as_ref().unwrap().prefix, "/onomato/shooter");
+    assert_eq!(runner.osc.as_ref().unwrap().prefix, "/onomato/runner");
+    assert_eq!(shooter.midi.as_ref().unwrap().channel, 1);
+    assert_eq!(runner.midi.as_ref().unwrap().channel, 2);
+    let pattern_names = |c: &Config| {
+        c.patterns
+            .iter()
+            .map(|p| p.name.clone())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(pattern_names(shooter), ["pew", "boom"]);
+    assert_eq!(pattern_names(runner), ["hup", "whoo"]);
+    assert_eq!(runner.patterns[1].kind, PatternKind::Continuous);
+    let bounce = runner.bounce.as_ref().unwrap();
+    assert_eq!(bounce.styles.get("whoo"), Some(&ContactStyle::Slide));
+    assert!(shooter.bounce.is_none());
+    for (_, c) in &lanes {
+        load_patterns(&c.patterns, &c.detector).unwrap();
+    }
+    // One performer alone, for analyze and record.
+    let runner_alone = config.select_performer(Some("runner")).unwrap();
+    assert_eq!(pattern_names(&runner_alone), ["hup", "whoo"]);
+    assert!(runner_alone.performers.is_empty());
+    let e = config.select_performer(Some("drummer")).unwrap_err();
+    assert!(
+        e.contains("no such performer") && e.contains("'shooter', 'runner'"),
+        "{e}"
+    );
+    let e = config.select_performer(None).unwrap_err();
+    assert!(e.contains("name one with --performer"), "{e}");
+}
+
+#[test]
+fn performer_mistakes_name_the_performer_and_what_was_expected() {
+    const ONE: &str = "[[performer]]\nname = \"anna\"\nchannel = 0\n[[performer.pattern]]\nname = \"tick\"\ntakes = [\"tick.wav\"]\n";
+    for (text, want) in [
+        (
+            format!("{TICK}{ONE}"),
+            "[[pattern]] sections cannot be used with [[performer]]",
+        ),
+        (
+            format!("{ONE}{ONE}"),
+            "performer #2 ('anna'): performer name 'anna' is used twice",
+        ),
+        (
+            "[[performer]]\nname = \"a b\"\n".to_string(),
+            "performer name must be 1-64 characters",
+        ),
+        (
+            "[[performer]]\nname = \"anna\"\n".to_string(),
+            "performer #1 ('anna'): no [[performer.pattern]]",
+        ),
+        (
+            ONE.replace("channel = 0\n", "channel = 0\nmidi_channel = 17\n"),
+            "performer #1 ('anna'): midi_channel must be a MIDI channel from 1 to 16, found 17",
+        ),
+        (
+            format!("{ONE}[bounce]\n"),
+            "[bounce] cannot be used with [[performer]]",
+        ),
+        (
+            format!("[detector]\nchannel = 1\n{ONE}"),
+            "[detector] channel cannot be used with [[performer]]",
+        ),
+        (
+            format!("{ONE}[performer.bounce]\nhard = [\"pop\"]\n"),
+            "performer #1 ('anna'), [performer.bounce]",
+        ),
+        (
+            "[[performer]]\nname = \"anna\"\nchanel = 0\n".to_string(),
+            "unknown field `chanel`",
+        ),
+        (
+            ONE.replace("channel = 0", "osc_prefix = \"anna\""),
+            "osc_prefix",
+        ),
+        (
+            ONE.replace("takes = [\"tick.wav\"]", "takes = []"),
+            "performer #1 ('anna'), pattern #1 ('tick'): takes is empty",
+        ),
+    ] {
+        let msg = parse_err(&text);
+        assert!(msg.contains(want), "{text:?}\nexpected {want:?} in: {msg}");
+    }
+    let nine: String = (0..9)
+        .map(|i| ONE.replace("\"anna\"", &format!("\"p{i}\"")))
+        .collect();
+    assert!(parse_err(&nine).contains("at most 8 performers, found 9"));
+}

@@ -216,3 +216,91 @@ fn record_warns_when_the_new_pattern_looks_like_one_the_spectral_method_has() {
         assert_eq!(log.contains(&warning), alike, "{name}: {log}");
     }
 }
+
+#[test]
+fn record_for_a_performer_takes_its_channel_and_writes_its_own_pattern() {
+    let dir = temp_dir("record-performer");
+    let tick = root().join("examples/patterns/tick.wav");
+    let config = dir.join("duo.toml");
+    let pattern = |name: &str| {
+        format!(
+            "[[performer.pattern]]\nname = \"{name}\"\ntakes = [{:?}]\n",
+            tick.to_string_lossy()
+        )
+    };
+    let text = format!(
+        "# Two of us.\n[[performer]]\nname = \"left\"\nchannel = 0\n{}\n[[performer]]\nname = \"right\"\nchannel = 1\n{}",
+        pattern("tick"),
+        pattern("tick")
+    );
+    std::fs::write(&config, &text).unwrap();
+    // Left: booms at 0.5 and 2.0 s; right: pops at 1.0 and 2.5 s.
+    let (boom, rate) = example_take("boom");
+    let (pop, _) = example_take("pop");
+    let mut left = vec![0.0f32; samples_for(3.5, rate)];
+    let mut right = left.clone();
+    for at in [0.5, 2.0] {
+        place(&mut left, &boom, samples_for(at, rate), 1.0);
+    }
+    for at in [1.0, 2.5] {
+        place(&mut right, &pop, samples_for(at, rate), 1.0);
+    }
+    let frames: Vec<Vec<f32>> = left.iter().zip(&right).map(|(l, r)| vec![*l, *r]).collect();
+    let input = dir.join("two-channels.wav");
+    write_wav_int(&input, &frames, rate, 16);
+
+    let (code, log) = record_with(
+        &["pop", "--performer", "right", "--takes", "2"],
+        &config,
+        &input,
+    );
+    assert_eq!(code, Some(0), "{log}");
+    // The right channel's two pops, not the left channel's booms.
+    let starts: Vec<f64> = log
+        .lines()
+        .filter_map(|l| {
+            l.strip_prefix("take ")?
+                .split_once(": ")?
+                .1
+                .split('-')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert_eq!(starts.len(), 2, "{log}");
+    for (start, placed) in starts.iter().zip([1.0, 2.5]) {
+        assert!(
+            (start - placed).abs() < 0.05,
+            "a take at {start} s, not at {placed} s: {log}"
+        );
+    }
+    for k in 1..=2 {
+        assert!(dir.join(format!("right-pop-{k}.wav")).exists(), "{log}");
+    }
+    let updated = std::fs::read_to_string(&config).unwrap();
+    assert!(updated.starts_with("# Two of us.\n"), "{updated}");
+    let loaded = onomato::config::Config::load(&config).unwrap();
+    let names = |who: &str| -> Vec<String> {
+        loaded
+            .select_performer(Some(who))
+            .unwrap()
+            .patterns
+            .iter()
+            .map(|p| p.name.clone())
+            .collect()
+    };
+    assert_eq!(names("right"), ["tick", "pop"]);
+    assert_eq!(names("left"), ["tick"], "the other performer is untouched");
+
+    // A performer the config does not have, and a config of performers without one.
+    let (code, log) = record_with(&["pop", "--performer", "middle"], &config, &input);
+    assert_eq!(code, Some(1));
+    assert!(
+        log.contains("--performer 'middle': no such performer; the config has 'left', 'right'"),
+        "{log}"
+    );
+    let (code, log) = record_with(&["pop"], &config, &input);
+    assert_eq!(code, Some(1));
+    assert!(log.contains("name one with --performer"), "{log}");
+}
