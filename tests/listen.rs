@@ -858,6 +858,98 @@ fn write_config(path: &Path, prefix: &str, threshold: &str, osc: &str) {
     fs::write(path, text).unwrap();
 }
 
+/// The duel example's two soundtracks as one stereo file: the shots (one voice) on
+/// the left, the jumps and slides (another voice) on the right.
+fn duel_in_stereo(dir: &Path) -> PathBuf {
+    let read = |name: &str| -> (Vec<f32>, u32) {
+        let mut r = hound::WavReader::open(root().join("examples/duel").join(name)).unwrap();
+        let rate = r.spec().sample_rate;
+        let s = r
+            .samples::<i16>()
+            .map(|s| f32::from(s.unwrap()) / 32768.0)
+            .collect();
+        (s, rate)
+    };
+    let ((left, rate), (right, _)) = (read("shots.wav"), read("moves.wav"));
+    let frames: Vec<Vec<f32>> = left.iter().zip(&right).map(|(l, r)| vec![*l, *r]).collect();
+    let path = dir.join("duel-stereo.wav");
+    common::write_wav_int(&path, &frames, rate, 16);
+    path
+}
+
+fn duel_truth(name: &str) -> Vec<String> {
+    read(&root().join("examples/duel").join(name))
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_string())
+        .collect()
+}
+
+/// config/duo.toml with its takes' paths made absolute, its OSC to `osc` and no MIDI,
+/// and the runner's OSC prefix `runner_prefix`.
+fn duo_config(osc: &str, runner_prefix: &str) -> String {
+    let examples = root().join("examples");
+    read(&root().join("config/duo.toml"))
+        .replace("\"../examples", &format!("\"{}", examples.display()))
+        .replace(
+            "targets = [\"127.0.0.1:9000\"]",
+            &format!("targets = [\"{osc}\"]"),
+        )
+        .replace("[midi]\nvirtual_port = \"onomato\"\n", "")
+        .replace(
+            "# osc_prefix = \"/runner\"",
+            &format!("osc_prefix = \"{runner_prefix}\""),
+        )
+}
+
+#[test]
+fn sighup_reloads_one_performer_and_leaves_the_other_running() {
+    let dir = common::temp_dir("listen-reload-performer");
+    let osc = OscDump::start(&dir);
+    let config = dir.join("duo.toml");
+    fs::write(&config, duo_config(&osc.target(), "/before")).unwrap();
+    let stereo = duel_in_stereo(&dir);
+    let config_arg = config.to_string_lossy().to_string();
+    let stereo_arg = stereo.to_string_lossy().to_string();
+    let mut d = start_listen(&dir, &["-c", &config_arg, "--input", &stereo_arg], |c| c);
+    wait_for_text(&d.stderr, "listening", Duration::from_secs(10));
+    // After the runner's second hup (2.8 s) and before its third (4.9 s), outside its
+    // held sounds: its prefix changes, nothing else does.
+    std::thread::sleep(Duration::from_millis(3200));
+    fs::write(&config, duo_config(&osc.target(), "/after")).unwrap();
+    signal(&d.child, "HUP");
+    let status = wait_exit(&mut d.child, Duration::from_secs(30));
+    assert!(status.success(), "{}", read(&d.stderr));
+    let log = read(&d.stderr);
+    assert!(
+        log.contains("configuration reloaded") && log.contains("changed=osc"),
+        "{log}"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    let m = osc.messages();
+    let count = |prefix: &str| {
+        m.iter()
+            .filter(|m| m.addr.starts_with(prefix) && m.addr.ends_with("/event"))
+            .count()
+    };
+    // All 7 shots on the shooter's prefix; the runner's 10 messages (4 hups, 3 held
+    // whoos) split at the reload, none lost.
+    assert_eq!(count("/onomato/shooter/"), 7, "{m:#?}");
+    let (before, after) = (count("/before/"), count("/after/"));
+    assert_eq!(before + after, 10, "{m:#?}");
+    assert!(
+        before >= 3 && after >= 3,
+        "before {before}, after {after}: {m:#?}"
+    );
+    // The shooter's detector was not replaced: its numbering runs on unbroken.
+    let ids: Vec<i64> = m
+        .iter()
+        .filter(|m| m.addr == "/onomato/shooter/event")
+        .map(|m| m.f(5) as i64)
+        .collect();
+    assert_eq!(ids, (0..7).collect::<Vec<i64>>());
+}
+
 #[test]
 fn sighup_reloads_a_good_config_and_keeps_the_old_one_when_the_new_one_is_broken() {
     let dir = common::temp_dir("listen-reload");
@@ -1517,5 +1609,117 @@ mod jack {
             (0x89, 36),
             "the held note was not released"
         );
+    }
+
+    #[test]
+    fn two_performers_on_the_channels_of_one_capture_each_send_their_own_sounds() {
+        let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
+        let dir = common::temp_dir("listen-performers");
+        let stereo = duel_in_stereo(&dir);
+        let pulse = Pulse::start(&dir);
+        let jack = Jack::start(&dir, "duo");
+        let osc = OscDump::start(&dir);
+        let d = start_listen(
+            &dir,
+            &[
+                "-c",
+                "config/duo.toml",
+                "--osc",
+                &osc.target(),
+                "--midi",
+                "midi-monitor",
+                "--print",
+                "json",
+            ],
+            |c| {
+                pulse
+                    .env(c)
+                    .env("JACK_DEFAULT_SERVER", &jack.name)
+                    .env("JACK_NO_START_SERVER", "1")
+            },
+        );
+        wait_for_text(&d.stderr, "listening", Duration::from_secs(10));
+        std::thread::sleep(Duration::from_millis(500));
+        pulse.play(&stereo.to_string_lossy());
+        // 14 sounds: 7 shots, 4 hups and 3 held whoos (a begin and an end each).
+        osc.wait_count(|m| m.addr.ends_with("/event"), 17, CAPTURE_CATCH_UP);
+        std::thread::sleep(Duration::from_millis(300));
+        let log = stop_cleanly(d);
+        assert!(
+            log.contains("capturing") && log.contains("channels=2"),
+            "{log}"
+        );
+        let messages = osc.messages();
+        // Each prefix gets exactly its performer's sounds, in order.
+        let sounds = |prefix: &str| -> Vec<String> {
+            messages
+                .iter()
+                .filter_map(|m| {
+                    let rest = m.addr.strip_prefix(prefix)?;
+                    let parts: Vec<&str> = rest.split('/').collect();
+                    match parts[..] {
+                        ["", name] if !["event", "status", "bounce"].contains(&name) => {
+                            Some(name.to_string())
+                        }
+                        ["", name, "begin"] => Some(name.to_string()),
+                        _ => None,
+                    }
+                })
+                .collect()
+        };
+        assert_eq!(
+            sounds("/onomato/shooter"),
+            duel_truth("shots.truth.csv"),
+            "{messages:#?}"
+        );
+        assert_eq!(
+            sounds("/onomato/runner"),
+            duel_truth("moves.truth.csv"),
+            "{messages:#?}"
+        );
+        assert!(
+            messages
+                .iter()
+                .all(|m| m.addr.starts_with("/onomato/shooter/")
+                    || m.addr.starts_with("/onomato/runner/")),
+            "a message outside both prefixes: {messages:#?}"
+        );
+        // The runner's bounce solver launches on its hups and at the end of its slides;
+        // the shooter has none (no [performer.bounce], no states asked for).
+        let runner_hits = messages
+            .iter()
+            .filter(|m| m.addr == "/onomato/runner/bounce/hit")
+            .count();
+        assert_eq!(runner_hits, 4 + 3, "{messages:#?}");
+        // MIDI: one port, each performer's notes on its own channel, in the order of
+        // its sounds; every note released.
+        let midi = jack.messages();
+        let ons = |status: u8| -> Vec<u8> {
+            midi.iter()
+                .filter(|m| m.0 == status && m.2 > 0)
+                .map(|m| m.1)
+                .collect()
+        };
+        let notes = |labels: Vec<String>, map: &[(&str, u8)]| -> Vec<u8> {
+            labels
+                .iter()
+                .map(|l| map.iter().find(|(n, _)| n == l).unwrap().1)
+                .collect()
+        };
+        assert_eq!(
+            ons(0x90),
+            notes(duel_truth("shots.truth.csv"), &[("pew", 38), ("boom", 36)]),
+            "channel 1: {midi:?}"
+        );
+        assert_eq!(
+            ons(0x91),
+            notes(duel_truth("moves.truth.csv"), &[("hup", 42), ("whoo", 60)]),
+            "channel 2: {midi:?}"
+        );
+        assert!(
+            midi.iter().all(|m| matches!(m.0 & 0x0F, 0 | 1)),
+            "a message on another channel: {midi:?}"
+        );
+        assert_eq!(notes_left_on(&midi), Vec::<(u8, u8)>::new());
     }
 }
