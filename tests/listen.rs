@@ -858,25 +858,6 @@ fn write_config(path: &Path, prefix: &str, threshold: &str, osc: &str) {
     fs::write(path, text).unwrap();
 }
 
-/// The duel example's two soundtracks as one stereo file: the shots (one voice) on
-/// the left, the jumps and slides (another voice) on the right.
-fn duel_in_stereo(dir: &Path) -> PathBuf {
-    let read = |name: &str| -> (Vec<f32>, u32) {
-        let mut r = hound::WavReader::open(root().join("examples/duel").join(name)).unwrap();
-        let rate = r.spec().sample_rate;
-        let s = r
-            .samples::<i16>()
-            .map(|s| f32::from(s.unwrap()) / 32768.0)
-            .collect();
-        (s, rate)
-    };
-    let ((left, rate), (right, _)) = (read("shots.wav"), read("moves.wav"));
-    let frames: Vec<Vec<f32>> = left.iter().zip(&right).map(|(l, r)| vec![*l, *r]).collect();
-    let path = dir.join("duel-stereo.wav");
-    common::write_wav_int(&path, &frames, rate, 16);
-    path
-}
-
 fn duel_truth(name: &str) -> Vec<String> {
     read(&root().join("examples/duel").join(name))
         .lines()
@@ -908,7 +889,7 @@ fn sighup_reloads_one_performer_and_leaves_the_other_running() {
     let osc = OscDump::start(&dir);
     let config = dir.join("duo.toml");
     fs::write(&config, duo_config(&osc.target(), "/before")).unwrap();
-    let stereo = duel_in_stereo(&dir);
+    let stereo = common::duel_in_stereo(&dir);
     let config_arg = config.to_string_lossy().to_string();
     let stereo_arg = stereo.to_string_lossy().to_string();
     let mut d = start_listen(&dir, &["-c", &config_arg, "--input", &stereo_arg], |c| c);
@@ -1615,7 +1596,7 @@ mod jack {
     fn two_performers_on_the_channels_of_one_capture_each_send_their_own_sounds() {
         let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
         let dir = common::temp_dir("listen-performers");
-        let stereo = duel_in_stereo(&dir);
+        let stereo = common::duel_in_stereo(&dir);
         let pulse = Pulse::start(&dir);
         let jack = Jack::start(&dir, "duo");
         let osc = OscDump::start(&dir);

@@ -575,3 +575,91 @@ fn the_preview_serves_nothing_but_its_page_and_stream() {
         "{message}"
     );
 }
+
+/// config/duo.toml with its takes' paths made absolute, and no OSC or MIDI.
+fn duo_config(dir: &Path) -> PathBuf {
+    let examples = root().join("examples");
+    let text = read(&root().join("config/duo.toml"))
+        .replace("\"../examples", &format!("\"{}", examples.display()))
+        .replace("[osc]\ntargets = [\"127.0.0.1:9000\"]\n", "[osc]\n")
+        .replace("[midi]\nvirtual_port = \"onomato\"\n", "");
+    let path = dir.join("duo.toml");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn the_preview_draws_a_ball_per_performer() {
+    let dir = common::temp_dir("preview-duo");
+    let stereo = common::duel_in_stereo(&dir).to_string_lossy().to_string();
+    let config = duo_config(&dir).to_string_lossy().to_string();
+    let port = free_tcp_port();
+    let address = format!("127.0.0.1:{port}");
+    let (mut d, err) = listen(
+        &dir,
+        "duo",
+        &[
+            "-c",
+            &config,
+            "--input",
+            &stereo,
+            "--repeat",
+            "2",
+            "--preview",
+            &address,
+        ],
+    );
+    wait_connectable(&address);
+    let mut browser = Browser::open(&format!("http://{address}/?trace"));
+    // Into the second play, where both have sounded.
+    std::thread::sleep(Duration::from_secs_f64(8.0 + 3.75));
+    let still = root().join("target/preview-duo.png");
+    assert_eq!(
+        browser.ask(&format!("screenshot {}", still.display())),
+        "ok"
+    );
+    let status = wait_exit(&mut d, Duration::from_secs(30));
+    assert!(status.success(), "{}", read(&err));
+    let all = browser.trace();
+    let _ = writeln!(browser.stdin, "quit");
+    let trace = &all["trace"];
+    let performers = &trace["hellos"][0]["data"]["performers"];
+    let names: Vec<&str> = performers
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["shooter", "runner"]);
+    // Each performer's sounds reached the page tagged with it.
+    let sounds = trace["sounds"].as_array().unwrap();
+    for (index, own) in [(0, ["pew", "boom"]), (1, ["hup", "whoo"])] {
+        let theirs: Vec<&str> = sounds
+            .iter()
+            .filter(|s| s["performer"] == index)
+            .map(|s| s["pattern"].as_str().unwrap())
+            .collect();
+        assert!(theirs.len() >= 7, "performer {index}: {theirs:?}");
+        assert!(
+            theirs.iter().all(|p| own.contains(p)),
+            "performer {index}: {theirs:?}"
+        );
+    }
+    // A ball each, each on the floor at its own hits.
+    for index in 0..2 {
+        let frames = trace["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["performer"] == index)
+            .count();
+        assert!(frames > 100, "performer {index}: {frames} frames drawn");
+    }
+    check_ball(trace);
+    let errors = all["errors"].as_array().unwrap();
+    let events_url = format!("http://{address}/events");
+    assert!(
+        errors.iter().all(|e| e["url"] == events_url.as_str()),
+        "the page logged errors: {errors:?}"
+    );
+}
