@@ -464,23 +464,30 @@ fn run_eval(args: &EvalArgs) -> anyhow::Result<()> {
         .context("cannot write to stdout")
 }
 
+/// Checks every performer (or the one `--performer` names).
 fn run_check(source: &PatternSource) -> anyhow::Result<()> {
-    let config = source.to_config()?;
-    let patterns = pattern::load_patterns(&config.patterns, &config.detector)?;
+    let config = source.to_daemon_config()?;
     let mut err = std::io::stderr().lock();
-    for p in &patterns {
-        let _ = writeln!(
-            err,
-            "pattern '{}' ({}): {} take(s), {:.0} ms longest, threshold {}",
-            p.name,
-            p.kind.as_str(),
-            p.takes.len(),
-            p.max_len() as f64 * 1000.0 / f64::from(config.detector.sample_rate),
-            p.threshold
-        );
-    }
-    for warning in pattern::look_alike_patterns(patterns, &config.detector)? {
-        let _ = writeln!(err, "warning: {warning}");
+    for (name, lane) in config.lanes() {
+        let who = name
+            .map(|n| format!("performer '{n}', "))
+            .unwrap_or_default();
+        let patterns = pattern::load_patterns(&lane.patterns, &lane.detector)
+            .with_context(|| who.trim_end_matches(", ").to_string())?;
+        for p in &patterns {
+            let _ = writeln!(
+                err,
+                "{who}pattern '{}' ({}): {} take(s), {:.0} ms longest, threshold {}",
+                p.name,
+                p.kind.as_str(),
+                p.takes.len(),
+                p.max_len() as f64 * 1000.0 / f64::from(lane.detector.sample_rate),
+                p.threshold
+            );
+        }
+        for warning in pattern::look_alike_patterns(patterns, &lane.detector)? {
+            let _ = writeln!(err, "warning: {who}{warning}");
+        }
     }
     let _ = writeln!(err, "configuration is valid");
     Ok(())

@@ -791,3 +791,88 @@ fn one_threshold_scale_for_both_methods_and_a_low_threshold_is_accepted() {
         stderr(&out)
     );
 }
+
+/// A config of performers: `check` checks each; `analyze` works on the one named;
+/// mistakes name what there is.
+#[test]
+fn commands_on_a_config_of_performers_take_one_by_name() {
+    let out = onomato(&["check", "-c", "config/duo.toml"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for line in [
+        "performer 'shooter', pattern 'pew' (impulse)",
+        "performer 'runner', pattern 'whoo' (continuous)",
+        "configuration is valid",
+    ] {
+        assert!(stderr(&out).contains(line), "{}", stderr(&out));
+    }
+    let out = onomato(&[
+        "analyze",
+        "examples/duel/moves.wav",
+        "-c",
+        "config/duo.toml",
+        "--performer",
+        "runner",
+        "--format",
+        "csv",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let found: Vec<String> = stdout(&out)
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_string())
+        .collect();
+    let truth: Vec<String> = std::fs::read_to_string(root().join("examples/duel/moves.truth.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_string())
+        .collect();
+    assert_eq!(found, truth);
+    assert_each_fails_with(&[
+        (
+            &[
+                "analyze",
+                "examples/duel/moves.wav",
+                "-c",
+                "config/duo.toml",
+            ],
+            "the config has performers ('shooter', 'runner'); name one with --performer",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/duel/moves.wav",
+                "-c",
+                "config/duo.toml",
+                "--performer",
+                "drummer",
+            ],
+            "--performer 'drummer': no such performer",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--performer",
+                "runner",
+            ],
+            "--performer 'runner': the config has no [[performer]] sections",
+        ),
+        (
+            &["listen", "-c", "config/duo.toml", "--channel", "1"],
+            "--channel: each performer of config 'config/duo.toml' has its own channel",
+        ),
+        (
+            &[
+                "listen",
+                "-c",
+                "config/duo.toml",
+                "--input",
+                "examples/duel/moves.wav",
+            ],
+            "performer 'runner': channel 1 (counted from 0), but the input has 1 channel",
+        ),
+    ]);
+}
