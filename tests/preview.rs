@@ -132,6 +132,13 @@ fn listen(dir: &Path, tag: &str, args: &[&str]) -> (Child, PathBuf) {
     (child, err)
 }
 
+/// `listen` replaying `wav` with the example's config, and `extra` arguments.
+fn replay(dir: &Path, tag: &str, wav: &str, extra: &[&str]) -> (Child, PathBuf) {
+    let mut args = vec!["-c", "config/onomato.toml", "--input", wav];
+    args.extend_from_slice(extra);
+    listen(dir, tag, &args)
+}
+
 /// The `/event` messages as (pattern, kind, id, arrival).
 fn osc_sounds(messages: &[OscLine]) -> Vec<(String, String, i64, f64)> {
     messages
@@ -267,18 +274,7 @@ fn the_preview_shows_every_event_osc_gets_and_comes_back_after_a_restart() {
     let silence = dir.join("silence.wav");
     common::write_wav_f32(&silence, &vec![0.0; 22_050 * 60], 22_050);
     let silence = silence.to_string_lossy().to_string();
-    let (mut opener, _) = listen(
-        &dir,
-        "opener",
-        &[
-            "-c",
-            "config/onomato.toml",
-            "--input",
-            &silence,
-            "--preview",
-            &address,
-        ],
-    );
+    let (mut opener, _) = replay(&dir, "opener", &silence, &["--preview", &address]);
     wait_connectable(&address);
     let mut browser = Browser::open(&format!("http://{address}/?trace"));
     opener.kill().unwrap();
@@ -286,14 +282,11 @@ fn the_preview_shows_every_event_osc_gets_and_comes_back_after_a_restart() {
 
     // First run: played twice; killed in the silence before the second play.
     let osc1 = OscDump::start(&dir);
-    let (mut first, first_err) = listen(
+    let (mut first, first_err) = replay(
         &dir,
         "first",
+        &wav,
         &[
-            "-c",
-            "config/onomato.toml",
-            "--input",
-            &wav,
             "--repeat",
             "2",
             "--osc",
@@ -317,19 +310,11 @@ fn the_preview_shows_every_event_osc_gets_and_comes_back_after_a_restart() {
 
     // Second run, on the same address: the page reconnects by itself.
     let osc2 = OscDump::start(&dir);
-    let (mut second, second_err) = listen(
+    let (mut second, second_err) = replay(
         &dir,
         "second",
-        &[
-            "-c",
-            "config/onomato.toml",
-            "--input",
-            &wav,
-            "--osc",
-            &osc2.target(),
-            "--preview",
-            &address,
-        ],
+        &wav,
+        &["--osc", &osc2.target(), "--preview", &address],
     );
     let second_started = Instant::now();
     let second_start = unix_now();
@@ -447,14 +432,11 @@ fn a_stalled_preview_client_never_delays_osc() {
     let osc = OscDump::start(&dir);
     let speed = 2.0;
     let started = unix_now();
-    let (mut d, err) = listen(
+    let (mut d, err) = replay(
         &dir,
         "stalled",
+        &wav,
         &[
-            "-c",
-            "config/onomato.toml",
-            "--input",
-            &wav,
             "--speed",
             "2",
             "--repeat",
@@ -495,18 +477,7 @@ fn the_preview_serves_nothing_but_its_page_and_stream() {
     let dir = common::temp_dir("preview-paths");
     let port = free_tcp_port();
     let address = format!("127.0.0.1:{port}");
-    let (mut d, err) = listen(
-        &dir,
-        "paths",
-        &[
-            "-c",
-            "config/onomato.toml",
-            "--input",
-            "examples/beat.wav",
-            "--preview",
-            &address,
-        ],
-    );
+    let (mut d, err) = replay(&dir, "paths", "examples/beat.wav", &["--preview", &address]);
     let get = |request: &str| -> String {
         wait_connectable(&address);
         let mut s = TcpStream::connect(&address).unwrap();
