@@ -449,7 +449,7 @@ fn a_stalled_preview_client_never_delays_osc() {
     );
     let stalled = TcpStream::from(stalled_client(port));
     (&stalled)
-        .write_all(b"GET /events HTTP/1.1\r\nHost: x\r\n\r\n")
+        .write_all(b"GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n")
         .unwrap();
     let status = wait_exit(&mut d, Duration::from_secs(60));
     assert!(status.success(), "{}", read(&err));
@@ -486,7 +486,7 @@ fn the_preview_serves_nothing_but_its_page_and_stream() {
         let _ = std::io::Read::read_to_string(&mut s, &mut out);
         out
     };
-    let page = get("GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+    let page = get("GET / HTTP/1.1\r\nHost: localhost\r\n\r\n");
     assert!(page.starts_with("HTTP/1.1 200 OK"), "{page}");
     assert!(page.contains("<canvas"), "{page}");
     for path in [
@@ -496,11 +496,14 @@ fn the_preview_serves_nothing_but_its_page_and_stream() {
         "/favicon.ico",
         "/../config/onomato.toml",
     ] {
-        let r = get(&format!("GET {path} HTTP/1.1\r\nHost: x\r\n\r\n"));
+        let r = get(&format!("GET {path} HTTP/1.1\r\nHost: localhost\r\n\r\n"));
         assert!(r.starts_with("HTTP/1.1 404 Not Found"), "{path}: {r}");
     }
-    let r = get("POST /events HTTP/1.1\r\nHost: x\r\nContent-Length: 4\r\n\r\nstop");
+    let r = get("POST /events HTTP/1.1\r\nHost: localhost\r\nContent-Length: 4\r\n\r\nstop");
     assert!(r.starts_with("HTTP/1.1 405"), "{r}");
+    // A page of another site that reaches this port through a name of its own.
+    let r = get("GET /events HTTP/1.1\r\nHost: rebound.example:8765\r\n\r\n");
+    assert!(r.starts_with("HTTP/1.1 421"), "{r}");
     signal(&d, "TERM");
     let status = wait_exit(&mut d, Duration::from_secs(10));
     assert!(status.success(), "{}", read(&err));

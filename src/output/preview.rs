@@ -1,7 +1,10 @@
 //! The live preview (`listen --preview`): an HTTP server that serves one page
 //! (`preview.html`) at `/` and a stream of Server-Sent Events at `/events`, and nothing
 //! else: any other path is a 404, any other method a 405, and nothing a browser sends
-//! is read beyond the request line and headers (it takes no commands).
+//! is read beyond the request line and headers (it takes no commands). Bound to
+//! loopback, it answers only requests addressed to this machine by name (`Host:
+//! localhost`, `127.0.0.1`, `[::1]`), so that a web page elsewhere cannot reach it
+//! through a host name of its own that points here (DNS rebinding).
 //!
 //! Threads: an accept thread (`onomato-preview`) and one thread per open connection, at
 //! most [`MAX_CONNECTIONS`]. The output thread publishes through [`PreviewHub`], which
@@ -161,7 +164,7 @@ impl PreviewServer {
             let stop = stop.clone();
             std::thread::Builder::new()
                 .name("onomato-preview".into())
-                .spawn(move || accept_loop(&listener, &hub, &stop))
+                .spawn(move || accept_loop(&listener, &hub, &stop, address.ip().is_loopback()))
                 .context("cannot start the preview's thread")?
         };
         tracing::info!(url = %format!("http://{address}/"), "preview page");
@@ -193,7 +196,7 @@ impl Drop for PreviewServer {
     }
 }
 
-fn accept_loop(listener: &TcpListener, hub: &PreviewHub, stop: &Arc<AtomicBool>) {
+fn accept_loop(listener: &TcpListener, hub: &PreviewHub, stop: &Arc<AtomicBool>, loopback: bool) {
     let open = Arc::new(AtomicUsize::new(0));
     while !stop.load(Ordering::Acquire) {
         match listener.accept() {
@@ -216,7 +219,7 @@ fn accept_loop(listener: &TcpListener, hub: &PreviewHub, stop: &Arc<AtomicBool>)
                 let spawned = std::thread::Builder::new()
                     .name("onomato-preview-conn".into())
                     .spawn(move || {
-                        if let Err(e) = serve(socket, &hub, &stop) {
+                        if let Err(e) = serve(socket, &hub, &stop, loopback) {
                             tracing::debug!("preview connection ended: {e}");
                         }
                         open_now.fetch_sub(1, Ordering::AcqRel);
@@ -251,12 +254,28 @@ enum Route {
     NotFound,
     /// Not GET or HEAD.
     MethodNotAllowed,
+    /// Addressed to another host name than this machine's (a loopback server only).
+    WrongHost,
     BadRequest,
 }
 
+/// Whether a `Host` header names this machine: `localhost`, `127.0.0.1` or `[::1]`,
+/// with or without a port.
+fn is_local_host(host: &str) -> bool {
+    let name = match host.strip_prefix('[') {
+        Some(v6) => v6.split(']').next().unwrap_or(""),
+        None => host.split(':').next().unwrap_or(""),
+    };
+    name.eq_ignore_ascii_case("localhost")
+        || name
+            .parse::<std::net::IpAddr>()
+            .is_ok_and(|ip| ip.is_loopback())
+}
+
 /// Parses a request head (everything up to the blank line); returns the route and
-/// whether only the head is wanted.
-fn route(head: &[u8]) -> (Route, bool) {
+/// whether only the head is wanted. `loopback`: the server listens on loopback, and
+/// answers requests for this machine only.
+fn route(head: &[u8], loopback: bool) -> (Route, bool) {
     let mut headers = [httparse::EMPTY_HEADER; 32];
     let mut request = httparse::Request::new(&mut headers);
     match request.parse(head) {
@@ -266,6 +285,17 @@ fn route(head: &[u8]) -> (Route, bool) {
     let head_only = request.method == Some("HEAD");
     if !matches!(request.method, Some("GET" | "HEAD")) {
         return (Route::MethodNotAllowed, false);
+    }
+    if loopback {
+        let host = request
+            .headers
+            .iter()
+            .find(|h| h.name.eq_ignore_ascii_case("host"))
+            .map(|h| String::from_utf8_lossy(h.value).trim().to_string());
+        // HTTP/1.0 clients may send none; a browser always does.
+        if host.is_some_and(|h| !is_local_host(&h)) {
+            return (Route::WrongHost, false);
+        }
     }
     let path = request.path.unwrap_or("");
     let path = path.split(['?', '#']).next().unwrap_or("");
@@ -314,10 +344,15 @@ fn respond(
     socket.flush()
 }
 
-fn serve(mut socket: TcpStream, hub: &PreviewHub, stop: &AtomicBool) -> std::io::Result<()> {
+fn serve(
+    mut socket: TcpStream,
+    hub: &PreviewHub,
+    stop: &AtomicBool,
+    loopback: bool,
+) -> std::io::Result<()> {
     prepare(&socket)?;
     let head = read_head(&mut socket)?;
-    match route(&head) {
+    match route(&head, loopback) {
         (Route::Page, head_only) => respond(
             &mut socket,
             "200 OK",
@@ -338,6 +373,13 @@ fn serve(mut socket: TcpStream, hub: &PreviewHub, stop: &AtomicBool) -> std::io:
             socket.write_all(b"HTTP/1.1 405 Method Not Allowed\r\nAllow: GET, HEAD\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")?;
             socket.flush()
         }
+        (Route::WrongHost, _) => respond(
+            &mut socket,
+            "421 Misdirected Request",
+            "text/plain; charset=utf-8",
+            b"this preview answers requests for localhost only\n",
+            false,
+        ),
         (Route::BadRequest, _) => respond(
             &mut socket,
             "400 Bad Request",
@@ -407,8 +449,11 @@ mod tests {
 
     #[test]
     fn routes_by_method_and_path() {
-        let r = |h: &str| route(h.as_bytes());
-        assert_eq!(r("GET / HTTP/1.1\r\nHost: x\r\n\r\n"), (Route::Page, false));
+        let r = |h: &str| route(h.as_bytes(), true);
+        assert_eq!(
+            r("GET / HTTP/1.1\r\nHost: localhost\r\n\r\n"),
+            (Route::Page, false)
+        );
         assert_eq!(r("GET /?trace HTTP/1.1\r\n\r\n"), (Route::Page, false));
         assert_eq!(r("HEAD / HTTP/1.1\r\n\r\n"), (Route::Page, true));
         assert_eq!(r("GET /events HTTP/1.1\r\n\r\n"), (Route::Events, false));
@@ -426,6 +471,40 @@ mod tests {
         );
         assert_eq!(r("GET / HTTP/1.1\r\n"), (Route::BadRequest, false));
         assert_eq!(r("\u{1}\u{2} nonsense\r\n\r\n"), (Route::BadRequest, false));
+    }
+
+    #[test]
+    fn a_loopback_server_answers_requests_for_this_machine_only() {
+        for host in [
+            "localhost",
+            "LOCALHOST:8765",
+            "127.0.0.1:8765",
+            "127.0.0.2",
+            "[::1]:8765",
+            "[::1]",
+        ] {
+            let head = format!("GET / HTTP/1.1\r\nHost: {host}\r\n\r\n");
+            assert_eq!(route(head.as_bytes(), true), (Route::Page, false), "{host}");
+        }
+        for host in [
+            "evil.example:8765",
+            "192.168.1.2:8765",
+            "localhost.evil.example",
+            "x",
+        ] {
+            let head = format!("GET /events HTTP/1.1\r\nHost: {host}\r\n\r\n");
+            assert_eq!(
+                route(head.as_bytes(), true),
+                (Route::WrongHost, false),
+                "{host}"
+            );
+            // Told to listen elsewhere, it answers whatever name it was reached by.
+            assert_eq!(
+                route(head.as_bytes(), false),
+                (Route::Events, false),
+                "{host}"
+            );
+        }
     }
 
     #[test]
