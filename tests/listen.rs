@@ -1625,11 +1625,25 @@ mod jack {
         // 14 sounds: 7 shots, 4 hups and 3 held whoos (a begin and an end each).
         osc.wait_count(|m| m.addr.ends_with("/event"), 17, CAPTURE_CATCH_UP);
         std::thread::sleep(Duration::from_millis(300));
+        let stdout = d.stdout.clone();
         let log = stop_cleanly(d);
         assert!(
             log.contains("capturing") && log.contains("channels=2"),
             "{log}"
         );
+        // The printed records name their performer first.
+        let printed = read(&stdout);
+        assert_eq!(printed.lines().count(), 17, "{printed}");
+        for line in printed.lines() {
+            let shooter = ["\"pattern\":\"pew\"", "\"pattern\":\"boom\""]
+                .iter()
+                .any(|p| line.contains(p));
+            let who = if shooter { "shooter" } else { "runner" };
+            assert!(
+                line.starts_with(&format!("{{\"performer\":\"{who}\",\"id\":")),
+                "{line}"
+            );
+        }
         let messages = osc.messages();
         // Each prefix gets exactly its performer's sounds, in order.
         let sounds = |prefix: &str| -> Vec<String> {

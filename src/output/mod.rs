@@ -422,9 +422,12 @@ fn hit_json(lane: usize, h: &LiveHit) -> String {
 /// The event record, with the index of its performer.
 fn publish_sound(preview: Option<&PreviewHub>, lane: usize, e: &Event) {
     if let Some(p) = preview.filter(|p| p.watched()) {
-        if let Ok(serde_json::Value::Object(mut record)) = serde_json::to_value(e) {
-            record.insert("performer".into(), lane.into());
-            p.publish("sound", &serde_json::Value::Object(record).to_string());
+        let record = print::PerformerEvent {
+            performer: lane,
+            event: e,
+        };
+        if let Ok(json) = serde_json::to_string(&record) {
+            p.publish("sound", &json);
         }
     }
 }

@@ -75,7 +75,7 @@ impl Printer {
     }
 
     /// Prints one event, unless the queue is full: then it is counted as dropped.
-    /// Prints one event; `performer`: its performer's name, with `[[performer]]`s.
+    /// `performer`: its performer's name, with `[[performer]]`s.
     pub fn event(&mut self, performer: Option<&str>, e: &Event, begin_sent: bool) {
         let Some(line) = format_event(performer, e, begin_sent, self.mode) else {
             return;
@@ -184,6 +184,14 @@ fn clear_meter() {
 }
 
 /// One event as its printed line (with its newline); `None` when nothing is printed.
+/// An event record with its performer (a name, or an index) before its own fields.
+#[derive(serde::Serialize)]
+pub struct PerformerEvent<'a, P: serde::Serialize> {
+    pub performer: P,
+    #[serde(flatten)]
+    pub event: &'a Event,
+}
+
 pub fn format_event(
     performer: Option<&str>,
     e: &Event,
@@ -192,17 +200,15 @@ pub fn format_event(
 ) -> Option<String> {
     match mode {
         PrintMode::None => None,
-        // The event record, with the performer's name when there are performers.
+        // The event record, with the performer's name first when there are performers.
         PrintMode::Json => match performer {
-            None => serde_json::to_string(e).ok(),
-            Some(name) => match serde_json::to_value(e) {
-                Ok(serde_json::Value::Object(mut record)) => {
-                    record.insert("performer".into(), name.into());
-                    serde_json::to_string(&record).ok()
-                }
-                _ => None,
-            },
+            None => serde_json::to_string(e),
+            Some(performer) => serde_json::to_string(&PerformerEvent {
+                performer,
+                event: e,
+            }),
         }
+        .ok()
         .map(|l| l + "\n"),
         PrintMode::Text => {
             let (at, phase, held) = match (e.kind, e.end) {
