@@ -23,19 +23,11 @@ const LEAD_SECONDS: f64 = 3.0;
 
 /// The example with `LEAD_SECONDS` of silence before it.
 fn example_after_silence(dir: &Path) -> PathBuf {
-    let mut reader = hound::WavReader::open(root().join("examples/beat.wav")).unwrap();
-    let spec = reader.spec();
-    assert_eq!(spec.channels, 1);
-    let scale = 2f32.powi(i32::from(spec.bits_per_sample) - 1);
-    let mut samples = vec![0.0f32; (LEAD_SECONDS * f64::from(spec.sample_rate)) as usize];
-    match spec.sample_format {
-        hound::SampleFormat::Int => {
-            samples.extend(reader.samples::<i32>().map(|s| s.unwrap() as f32 / scale));
-        }
-        hound::SampleFormat::Float => samples.extend(reader.samples::<f32>().map(Result::unwrap)),
-    }
+    let (beat, rate) = common::read_wav_16(&root().join("examples/beat.wav"));
+    let mut samples = vec![0.0f32; (LEAD_SECONDS * f64::from(rate)) as usize];
+    samples.extend(beat);
     let path = dir.join("lead-and-beat.wav");
-    common::write_wav_f32(&path, &samples, spec.sample_rate);
+    common::write_wav_f32(&path, &samples, rate);
     path
 }
 

@@ -177,14 +177,7 @@ fn a_file_without_a_usable_take_is_an_error_and_the_config_is_untouched() {
 
 /// The example's take of `name`, read as mono samples at its own rate.
 fn example_take(name: &str) -> (Vec<f32>, u32) {
-    let path = root().join("examples/patterns").join(format!("{name}.wav"));
-    let mut reader = hound::WavReader::open(&path).unwrap();
-    let rate = reader.spec().sample_rate;
-    let samples = reader
-        .samples::<i16>()
-        .map(|s| f32::from(s.unwrap()) / 32768.0)
-        .collect();
-    (samples, rate)
+    read_wav_16(&root().join("examples/patterns").join(format!("{name}.wav")))
 }
 
 #[test]

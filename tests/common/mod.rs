@@ -200,18 +200,21 @@ pub fn patterns_for(method: Method) -> (DetectorSettings, Vec<Pattern>) {
     (settings, patterns)
 }
 
+/// A 16-bit mono WAV file of the project's, as samples and its rate.
+pub fn read_wav_16(path: &Path) -> (Vec<f32>, u32) {
+    let mut reader = hound::WavReader::open(path).unwrap();
+    let rate = reader.spec().sample_rate;
+    let samples = reader
+        .samples::<i16>()
+        .map(|s| f32::from(s.unwrap()) / 32768.0)
+        .collect();
+    (samples, rate)
+}
+
 /// The duel example's two soundtracks as one stereo file: the shots (one voice) on
 /// the left, the jumps and slides (another voice) on the right.
 pub fn duel_in_stereo(dir: &Path) -> PathBuf {
-    let read = |name: &str| -> (Vec<f32>, u32) {
-        let mut r = hound::WavReader::open(root().join("examples/duel").join(name)).unwrap();
-        let rate = r.spec().sample_rate;
-        let s = r
-            .samples::<i16>()
-            .map(|s| f32::from(s.unwrap()) / 32768.0)
-            .collect();
-        (s, rate)
-    };
+    let read = |name: &str| read_wav_16(&root().join("examples/duel").join(name));
     let ((left, rate), (right, _)) = (read("shots.wav"), read("moves.wav"));
     let frames: Vec<Vec<f32>> = left.iter().zip(&right).map(|(l, r)| vec![*l, *r]).collect();
     let path = dir.join("duel-stereo.wav");
