@@ -539,22 +539,11 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
         input_settings.device = Some(d.clone());
     }
     // The performer's channel; a config with performers needs one named.
-    let channel = match &args.performer {
-        Some(_) => {
-            config
-                .select_performer(args.performer.as_deref())
-                .map_err(|m| anyhow::anyhow!(m))?
-                .detector
-                .channel
-        }
-        None if !config.performers.is_empty() => {
-            return Err(anyhow::anyhow!(config
-                .select_performer(None)
-                .err()
-                .unwrap_or_default()));
-        }
-        None => config.detector.channel,
-    };
+    let channel = config
+        .select_performer(args.performer.as_deref())
+        .map_err(|m| anyhow::anyhow!(m))?
+        .detector
+        .channel;
     let options = crate::record::RecordOptions {
         name: args.name.clone(),
         performer: args.performer.clone(),

@@ -13,9 +13,10 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
+#[cfg(feature = "jack")]
+use common::procs::spawn_child;
 use common::procs::{
-    free_udp_port, read, signal, spawn, spawn_child, unix_now, wait_exit, wait_for_text, Guard,
-    OscDump, OscLine,
+    free_udp_port, read, signal, spawn, unix_now, wait_exit, wait_for_text, Guard, OscDump, OscLine,
 };
 use common::root;
 
@@ -858,14 +859,6 @@ fn write_config(path: &Path, prefix: &str, threshold: &str, osc: &str) {
     fs::write(path, text).unwrap();
 }
 
-fn duel_truth(name: &str) -> Vec<String> {
-    read(&root().join("examples/duel").join(name))
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).unwrap().to_string())
-        .collect()
-}
-
 /// config/duo.toml with its takes' paths made absolute, its OSC to `osc` and no MIDI,
 /// and the runner's OSC prefix `runner_prefix`.
 fn duo_config(osc: &str, runner_prefix: &str) -> String {
@@ -894,9 +887,22 @@ fn sighup_reloads_one_performer_and_leaves_the_other_running() {
     let stereo_arg = stereo.to_string_lossy().to_string();
     let mut d = start_listen(&dir, &["-c", &config_arg, "--input", &stereo_arg], |c| c);
     wait_for_text(&d.stderr, "listening", Duration::from_secs(10));
+    let started = Instant::now();
+    // A channel the stereo input does not have: refused by name, the running
+    // configuration kept.
+    std::thread::sleep(Duration::from_millis(1000));
+    let runner_on_3 =
+        duo_config(&osc.target(), "/before").replace("channel = 1\n", "channel = 3\n");
+    fs::write(&config, runner_on_3).unwrap();
+    signal(&d.child, "HUP");
+    wait_for_text(
+        &d.stderr,
+        "reload refused, keeping the running configuration: performer 'runner': channel 3 (counted from 0), but the input has 2 channels",
+        Duration::from_secs(5),
+    );
     // After the runner's second hup (2.8 s) and before its third (4.9 s), outside its
     // held sounds: its prefix changes, nothing else does.
-    std::thread::sleep(Duration::from_millis(3200));
+    std::thread::sleep(Duration::from_millis(3200).saturating_sub(started.elapsed()));
     fs::write(&config, duo_config(&osc.target(), "/after")).unwrap();
     signal(&d.child, "HUP");
     let status = wait_exit(&mut d.child, Duration::from_secs(30));
@@ -1590,6 +1596,15 @@ mod jack {
             (0x89, 36),
             "the held note was not released"
         );
+    }
+
+    /// The labels of a truth file of the duel example, in order.
+    fn duel_truth(name: &str) -> Vec<String> {
+        read(&root().join("examples/duel").join(name))
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(1).unwrap().to_string())
+            .collect()
     }
 
     #[test]

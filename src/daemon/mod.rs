@@ -362,6 +362,18 @@ fn load_lane_patterns(config: &Config) -> anyhow::Result<Vec<Vec<Pattern>>> {
         .collect()
 }
 
+/// One performer's detector at `rate` and the channel it hears; `lane`: its config
+/// (see [`Config::lanes`]).
+fn lane_detector(lane: &Config, patterns: &[Pattern], rate: u32) -> anyhow::Result<LaneDetector> {
+    Ok(LaneDetector {
+        detector: Detector::new(patterns.to_vec(), &lane.detector, rate)?,
+        select: lane
+            .detector
+            .channel
+            .map_or(ChannelSelect::Mix, ChannelSelect::Index),
+    })
+}
+
 /// A detector per performer at `rate`, from the loaded patterns.
 fn lane_detectors(
     config: &Config,
@@ -372,15 +384,7 @@ fn lane_detectors(
         .lanes()
         .iter()
         .zip(patterns)
-        .map(|((_, c), p)| {
-            Ok(LaneDetector {
-                detector: Detector::new(p.clone(), &c.detector, rate)?,
-                select: c
-                    .detector
-                    .channel
-                    .map_or(ChannelSelect::Mix, ChannelSelect::Index),
-            })
-        })
+        .map(|((_, c), p)| lane_detector(c, p, rate))
         .collect()
 }
 
@@ -565,7 +569,7 @@ pub fn listen(
     // The source: a replayed file or the microphone.
     let mut microphone = None;
     let mut replay = None;
-    let (mut rate, channels, consumer) = match &options.input_file {
+    let (mut rate, mut channels, consumer) = match &options.input_file {
         Some(path) => {
             let (r, consumer) = input::spawn_replay(
                 path,
@@ -677,6 +681,7 @@ pub fn listen(
                     &running_patterns,
                     &running_delays,
                     rate,
+                    channels,
                     options.print,
                 ) {
                     Ok(reload) => {
@@ -743,12 +748,12 @@ pub fn listen(
         }
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
-            if let Some((new_rate, channels, consumer)) = mic.reopen(&config) {
-                match check_channels(&config, channels)
+            if let Some((new_rate, new_channels, consumer)) = mic.reopen(&config) {
+                match check_channels(&config, new_channels)
                     .and_then(|()| lane_detectors(&config, &running_patterns, new_rate))
                 {
                     Ok(detectors) => {
-                        rate = new_rate;
+                        (rate, channels) = (new_rate, new_channels);
                         let _ = command_tx
                             .send(DetectorCommand::NewInput(consumer, channels, detectors));
                     }
@@ -867,9 +872,11 @@ fn prepare_reload(
     running_patterns: &[Vec<Pattern>],
     running_delays: &[f64],
     rate: u32,
+    channels: usize,
     print: PrintMode,
 ) -> anyhow::Result<Reload> {
     let config = load()?;
+    check_channels(&config, channels)?;
     let patterns = load_lane_patterns(&config)?;
     let lanes = config.lanes();
     let running_lanes = running.lanes();
@@ -888,15 +895,9 @@ fn prepare_reload(
             detectors.push(None);
             delays.push(running_delays[i]);
         } else {
-            let detector = Detector::new(p.clone(), &c.detector, rate)?;
-            delays.push(detector.decision_delay_bound());
-            detectors.push(Some(LaneDetector {
-                detector,
-                select: c
-                    .detector
-                    .channel
-                    .map_or(ChannelSelect::Mix, ChannelSelect::Index),
-            }));
+            let l = lane_detector(c, p, rate)?;
+            delays.push(l.detector.decision_delay_bound());
+            detectors.push(Some(l));
         }
     }
     if !same_performers {

@@ -158,8 +158,6 @@ struct Lane {
     heartbeat: Option<Duration>,
     /// Seconds between two drawn bounce states; `None`: no states are drawn.
     state_period: Option<f64>,
-    /// Drawn states go to OSC (`bounce_state_rate` is set).
-    osc_states: bool,
     /// Continuous events whose begin was sent and whose end was not.
     open: Vec<Event>,
     /// Sounds sent (impulses, held sounds once).
@@ -184,7 +182,6 @@ impl Lane {
             state_delay: 0.0,
             heartbeat: None,
             state_period: None,
-            osc_states: false,
             open: Vec::with_capacity(16),
             events: 0,
         };
@@ -216,7 +213,6 @@ impl Lane {
             .and_then(|o| o.heartbeat_seconds)
             .map(Duration::from_secs_f64);
         self.state_period = drawn_state_rate(s, preview).map(|r| 1.0 / r);
-        self.osc_states = state_rate(s).is_some();
     }
 
     /// Reload by difference: a new OSC target keeps the bounce solver and the held
@@ -257,18 +253,15 @@ impl Lane {
 
     /// Draws the bounce states up to stream time `until` and sends them where they go.
     fn draw_states(&mut self, until: f64, lane: usize, preview: Option<&PreviewHub>) {
-        let Lane {
-            bounce,
-            osc,
-            osc_states,
-            ..
-        } = self;
+        // They go to OSC when it sets a `bounce_state_rate`.
+        let osc_states = state_rate(&self.settings).is_some();
+        let Lane { bounce, osc, .. } = self;
         let Some(b) = bounce.as_mut() else {
             return;
         };
         let preview = preview.filter(|p| p.watched());
         b.draw_until(until, |s| {
-            if *osc_states {
+            if osc_states {
                 if let Some(o) = osc.as_mut() {
                     o.send_bounce_state(&s);
                 }
@@ -285,7 +278,6 @@ struct Sinks {
     /// The port all performers share; each lane's notes on its own channel.
     midi: Option<MidiSink>,
     midi_settings: Option<(MidiSettings, Vec<NoteMapping>)>,
-    preview: bool,
     origin: SystemTime,
 }
 
@@ -302,7 +294,6 @@ impl Sinks {
                 .as_ref()
                 .map(|(m, notes)| MidiSink::new(m.clone(), notes.clone())),
             midi_settings: s.midi.clone(),
-            preview: s.preview,
             origin,
         }
     }
@@ -336,7 +327,6 @@ impl Sinks {
                 .collect();
             changed.push("performers");
         }
-        self.preview = new.preview;
         match (&new.midi, self.midi.as_mut(), &self.midi_settings) {
             (Some((m, notes)), Some(sink), Some((old_m, old_notes)))
                 if m.port == old_m.port && (m != old_m || notes != old_notes) =>

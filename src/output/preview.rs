@@ -93,18 +93,21 @@ impl PreviewHub {
     pub fn set_hello(&self, data: &str) {
         let message = sse("hello", data);
         *lock(&self.shared.hello) = message.clone();
-        self.send(message);
+        self.send(|| message);
     }
 
     /// Sends one event (`kind`, JSON `data`) to every open stream.
     pub fn publish(&self, kind: &str, data: &str) {
-        if self.watched() {
-            self.send(sse(kind, data));
-        }
+        self.send(|| sse(kind, data));
     }
 
-    fn send(&self, message: Arc<str>) {
+    /// Sends a message to every open stream; it is made only when there is one.
+    fn send(&self, message: impl FnOnce() -> Arc<str>) {
         let mut streams = lock(&self.shared.streams);
+        if streams.is_empty() {
+            return;
+        }
+        let message = message();
         streams.retain(|s| match s.try_send(message.clone()) {
             Ok(()) => true,
             Err(TrySendError::Full(_)) => {
