@@ -60,6 +60,12 @@ pub struct OnsetParams {
     /// after the faint click of a finger landing, whose sound has not fallen back yet
     /// (2-5 score alike on the development sets: `docs/onset-stage.md`).
     pub new_sound_rise_ratio: f32,
+    /// A second onset function takes each band's rise over this many windows: a sound
+    /// that swells (a hiss in loud noise) rises too little within one window to stand
+    /// out, but by as much as an attack over a few. Its peaks are picked as the first
+    /// function's, and only where that one found nothing within this span, so it adds
+    /// onsets and never delays one (0: off; `docs/onset-stage.md`, "Slow rises").
+    pub slow_rise_windows: usize,
 }
 
 impl Default for OnsetParams {
@@ -76,6 +82,7 @@ impl Default for OnsetParams {
             new_sound_db: 15.0,
             rearm_after_seconds: 0.25,
             new_sound_rise_ratio: 4.0,
+            slow_rise_windows: 3,
         }
     }
 }
@@ -124,10 +131,14 @@ pub struct OnsetDetector {
     floor: Vec<f32>,
     /// How far a band at its noise floor stands over the floor's own log, dB.
     room_over_floor_db: f32,
-    /// Ring of floored log spectra, `lag + 2` frames of `bands`.
+    /// Ring of floored log spectra, `slow_lag + 2` frames of `bands`.
     history: Vec<f32>,
     /// Ring of onset-function values, `mean_frames + 2`.
     odf: Vec<f32>,
+    /// Frames between the compared frames of the slow-rise function (`lag` times
+    /// `slow_rise_windows`; 0 when off), and its values, as `odf`.
+    slow_lag: usize,
+    slow_odf: Vec<f32>,
     frames: u64,
     last_onset: Option<u64>,
     rearm_after_frames: u64,
@@ -146,6 +157,7 @@ impl OnsetDetector {
         let hop_seconds = hop as f64 / rate;
         let lag = win.div_ceil(hop).max(1);
         let mean_frames = ((params.mean_seconds / hop_seconds) as usize).max(1);
+        let slow_lag = lag * params.slow_rise_windows;
         Self {
             bands,
             lag,
@@ -156,8 +168,10 @@ impl OnsetDetector {
             floor_fall: 10f32.powf(-params.floor_fall_db_per_s * hop_seconds as f32 / 10.0),
             floor: vec![0.0; bands],
             room_over_floor_db: 10.0 * (1.0 + params.floor_weight).log10(),
-            history: vec![0.0; (lag + 2) * bands],
+            history: vec![0.0; (lag.max(slow_lag) + 2) * bands],
             odf: vec![0.0; mean_frames + 2],
+            slow_lag,
+            slow_odf: vec![0.0; mean_frames + 2],
             frames: 0,
             last_onset: None,
             rearm_after_frames: (params.rearm_after_seconds / hop_seconds) as u64,
@@ -178,7 +192,7 @@ impl OnsetDetector {
         let f = self.frames;
         self.frames += 1;
         let (bands, lag) = (self.bands, self.lag as u64);
-        let slots = (self.lag + 2) as u64;
+        let slots = (self.lag.max(self.slow_lag) + 2) as u64;
         let row = |g: u64| ((g % slots) as usize) * bands;
         let now = row(f);
         for (b, &p) in power.iter().enumerate().take(bands) {
@@ -195,7 +209,11 @@ impl OnsetDetector {
             };
             self.history[now + b] = 10.0 * (p + self.params.floor_weight * *fl).log10();
         }
-        let odf = if f >= lag {
+        // The mean over bands of each band's rise since `lag` frames ago, weighed.
+        let rise_since = |lag: u64| {
+            if lag == 0 || f < lag {
+                return 0.0;
+            }
             let before = row(f - lag);
             let mut rise = 0.0f32;
             for b in 0..bands {
@@ -203,11 +221,12 @@ impl OnsetDetector {
                     self.weight[b] * (self.history[now + b] - self.history[before + b]).max(0.0);
             }
             rise / bands as f32
-        } else {
-            0.0
         };
+        let odf = rise_since(lag);
+        let slow_odf = rise_since(self.slow_lag as u64);
         let n = self.odf.len() as u64;
         self.odf[(f % n) as usize] = odf;
+        self.slow_odf[(f % n) as usize] = slow_odf;
         // The candidate is the frame before: a peak once the function falls again.
         if f < 2 {
             return None;
@@ -239,16 +258,19 @@ impl OnsetDetector {
                 self.unarmed_rise = None;
             }
         }
-        let at = |g: u64| self.odf[(g % n) as usize];
-        let value = at(c);
-        if value <= odf || value < at(c - 1) {
-            return None;
-        }
-        let older = (self.mean_frames as u64).min(c);
-        let mean = (1..=older).map(|d| at(c - d)).sum::<f32>() / older.max(1) as f32;
-        if value < mean + self.params.threshold_db {
-            return None;
-        }
+        // A peak of either function at `c`, standing out of its recent mean; the slow
+        // one only where no onset was found within its span.
+        let value = match self.peak_at(&self.odf, c) {
+            Some(v) => v,
+            None if self.slow_lag > 0
+                && self
+                    .last_onset
+                    .is_none_or(|last| c - last > self.slow_lag as u64) =>
+            {
+                self.peak_at(&self.slow_odf, c)?
+            }
+            None => return None,
+        };
         if self
             .last_onset
             .is_some_and(|last| c - last < self.min_gap_frames)
@@ -286,6 +308,21 @@ impl OnsetDetector {
             flux_db: value,
         })
     }
+
+    /// The value of the onset function in ring `odf` at frame `c` (the newest frame is
+    /// `c + 1`) if it peaks there at least `threshold_db` over its mean of the
+    /// `mean_frames` before.
+    fn peak_at(&self, odf: &[f32], c: u64) -> Option<f32> {
+        let n = odf.len() as u64;
+        let at = |g: u64| odf[(g % n) as usize];
+        let value = at(c);
+        if value <= at(c + 1) || value < at(c - 1) {
+            return None;
+        }
+        let older = (self.mean_frames as u64).min(c);
+        let mean = (1..=older).map(|d| at(c - d)).sum::<f32>() / older.max(1) as f32;
+        (value >= mean + self.params.threshold_db).then_some(value)
+    }
 }
 
 #[cfg(test)]
@@ -315,7 +352,11 @@ mod tests {
     }
 
     fn onsets(signal: &[f32]) -> Vec<f64> {
-        let mut d = OnsetDetector::new(OnsetParams::default(), &[1.0; BANDS], WIN, HOP, RATE);
+        onsets_with(OnsetParams::default(), signal)
+    }
+
+    fn onsets_with(params: OnsetParams, signal: &[f32]) -> Vec<f64> {
+        let mut d = OnsetDetector::new(params, &[1.0; BANDS], WIN, HOP, RATE);
         let mut found = Vec::new();
         let mut start = 0;
         while start + WIN <= signal.len() {
@@ -374,6 +415,36 @@ mod tests {
         }
         let found = onsets(&s);
         assert!(found.iter().any(|t| (t - 0.32).abs() < 0.015), "{found:?}");
+    }
+
+    #[test]
+    fn a_hiss_that_swells_out_of_loud_noise_is_an_onset() {
+        // Noise at -30 dB; at 0.4 s a hiss swells over 40 ms to twice the noise's
+        // amplitude, holds 60 ms and fades over 100 ms: within any one window it rises
+        // by a few dB only.
+        let mut s = noise(RATE as usize, 0.03, 11);
+        let hiss = noise(4_410, 0.06, 12);
+        let (swell, hold) = (0.04 * RATE, 0.1 * RATE);
+        for (k, x) in hiss.iter().enumerate() {
+            let k = k as f64;
+            let gain = if k < swell {
+                k / swell
+            } else if k < hold {
+                1.0
+            } else {
+                (1.0 - (k - hold) / (0.2 * RATE - hold)).max(0.0)
+            };
+            s[(0.4 * RATE) as usize + k as usize] += x * gain as f32;
+        }
+        let found = onsets(&s);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!((found[0] - 0.42).abs() < 0.03, "{found:?}");
+        // Rises over one window alone do not stand out of the noise.
+        let one_window = OnsetParams {
+            slow_rise_windows: 0,
+            ..OnsetParams::default()
+        };
+        assert_eq!(onsets_with(one_window, &s), Vec::<f64>::new());
     }
 
     #[test]
