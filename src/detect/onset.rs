@@ -131,7 +131,7 @@ pub struct OnsetDetector {
     floor: Vec<f32>,
     /// How far a band at its noise floor stands over the floor's own log, dB.
     room_over_floor_db: f32,
-    /// Ring of floored log spectra, `slow_lag + 2` frames of `bands`.
+    /// Ring of floored log spectra, two frames more than the longer lag, of `bands`.
     history: Vec<f32>,
     /// Ring of onset-function values, `mean_frames + 2`.
     odf: Vec<f32>,
@@ -192,7 +192,7 @@ impl OnsetDetector {
         let f = self.frames;
         self.frames += 1;
         let (bands, lag) = (self.bands, self.lag as u64);
-        let slots = (self.lag.max(self.slow_lag) + 2) as u64;
+        let slots = (self.history.len() / bands.max(1)) as u64;
         let row = |g: u64| ((g % slots) as usize) * bands;
         let now = row(f);
         for (b, &p) in power.iter().enumerate().take(bands) {

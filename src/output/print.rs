@@ -183,7 +183,6 @@ fn clear_meter() {
     let _ = err.flush();
 }
 
-/// One event as its printed line (with its newline); `None` when nothing is printed.
 /// An event record with its performer (a name, or an index) before its own fields.
 #[derive(serde::Serialize)]
 pub struct PerformerEvent<'a, P: serde::Serialize> {
@@ -192,6 +191,7 @@ pub struct PerformerEvent<'a, P: serde::Serialize> {
     pub event: &'a Event,
 }
 
+/// One event as its printed line (with its newline); `None` when nothing is printed.
 pub fn format_event(
     performer: Option<&str>,
     e: &Event,
