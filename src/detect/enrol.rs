@@ -1,15 +1,17 @@
 //! The enrolment stage: turns a pattern's takes into the templates the matcher scores
-//! onsets against. A take's onset is placed where a stream would place it (the take is
-//! streamed through the matcher's own onset detection and placement, after noise),
-//! and its features are those the features stage gives a stream at that onset. Runs
+//! onsets against. A take's onset is placed where a stream would place it (the
+//! features, onset and placement stages run on the take after noise, as the matcher
+//! runs them on a stream), and its features are those the features stage gives a
+//! stream at that onset. Runs
 //! when a detector is built (on the thread that builds it), never per block.
 
 use super::features::{
     features_of_power, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
     HOP_SECONDS, WINDOW_SECONDS,
 };
-use super::onset::OnsetParams;
-use super::spectral::{first_window_within, SpectralMatcher, MAX_SHIFT, ONSET_RANGE_DB};
+use super::onset::{OnsetDetector, OnsetParams};
+use super::place::{first_window_within, Placer, ONSET_RANGE_DB, PLACE_AFTER_FRAMES};
+use super::spectral::MAX_SHIFT;
 use super::{white_noise, NOISE_SEED};
 use crate::config::{DetectorSettings, PatternKind};
 
@@ -343,12 +345,9 @@ fn probe_onset(
     let lead = (probe_lead_seconds() * rate) as usize;
     // Uniform in ±a has power a²/3.
     let amplitude = (3.0 * noise_power).sqrt();
-    let noise = white_noise(lead, amplitude, NOISE_SEED);
-    let mut probe = SpectralMatcher::new(Vec::new(), settings);
-    let mut no_events = Vec::new();
-    probe.push(&noise, &mut no_events);
-    probe.push(take, &mut no_events);
-    probe.finish(&mut no_events);
+    let mut signal = white_noise(lead, amplitude, NOISE_SEED);
+    signal.extend_from_slice(take);
+    let placed = placed_onsets(&signal, rate);
     let wanted = loudest * 10f32.powf(-TAKE_ONSET_RANGE_DB / 10.0);
     // The power of the 5-10 ms from a sample on.
     let power_at = |at: usize| {
@@ -358,13 +357,57 @@ fn probe_onset(
     // An onset placed a little before the take's first sample (the take was cut on its
     // burst) is at its start.
     let early_slack = (0.005 * rate) as usize;
-    probe
-        .placed_onsets()
+    placed
         .iter()
         .map(|&at| at as usize)
         .filter(|&at| at + early_slack >= lead)
         .map(|at| at.saturating_sub(lead))
         .find(|&at| at < take.len() && power_at(at) >= wanted)
+}
+
+/// Where a stream places the onsets of `signal` (at `rate`), samples: the features,
+/// onset and placement stages as the spectral matcher runs them, frame by frame.
+fn placed_onsets(signal: &[f32], rate: f64) -> Vec<u64> {
+    let mut analyzer = Analyzer::new(rate);
+    let (win, hop) = (analyzer.win, analyzer.hop);
+    let mut onsets = OnsetDetector::new(
+        OnsetParams::default(),
+        &analyzer.band_bins(),
+        win,
+        hop,
+        rate,
+    );
+    let mut placer = Placer::new(hop);
+    // Silence after the signal, so that an onset in its last frames is placed too (as a
+    // stream's end is).
+    let padded: Vec<f32> = signal
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(
+            0.0,
+            (PLACE_AFTER_FRAMES as usize + 2) * hop + win,
+        ))
+        .collect();
+    let signal = &padded;
+    let mut frame = vec![0.0f32; BANDS];
+    let mut placed = Vec::new();
+    let mut frames = 0u64;
+    // A frame is made every hop once a window's samples have arrived.
+    let mut consumed = hop;
+    while consumed <= signal.len() {
+        if consumed >= win {
+            analyzer.frame(&signal[consumed - win..consumed], &mut frame);
+            frames += 1;
+            if let Some(onset) = onsets.push(&analyzer.power) {
+                placer.detected(onset.frame);
+            }
+            while let Some(at) = placer.next(frames, consumed as u64, 0, |n| signal[n as usize]) {
+                placed.push(at);
+            }
+        }
+        consumed += hop;
+    }
+    placed
 }
 
 /// The noise a take is streamed after, seconds: the onset stage's longest memory for

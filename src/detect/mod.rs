@@ -17,6 +17,7 @@ pub mod gates;
 mod held;
 pub mod onset;
 mod pitch;
+mod place;
 pub mod spectral;
 pub mod waveform;
 

@@ -3,9 +3,10 @@
 //!
 //! Frames and features come from the features stage ([`super::features`]), onsets
 //! from the onset stage ([`super::onset`]) on the same frames' band powers. A few
-//! frames later an onset is placed on the samples (the first 1.5 ms window, sliding a
-//! sample at a time, within 12 dB of the loudest: a signal a few samples later gives an
-//! onset as many samples later and the same strength, wherever the frames fall). The
+//! frames later the placement stage ([`super::place`]) puts an onset on the samples
+//! (the first 1.5 ms window, sliding a sample at a time, within 12 dB of the loudest: a
+//! signal a few samples later gives an onset as many samples later and the same
+//! strength, wherever the frames fall), whatever became of the onsets before it. The
 //! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
 //! here: it must stand 10 dB out of the 40-10 ms before it (a consonant inside speech
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
@@ -13,7 +14,7 @@
 //! so on. The levels they compare are the sound in a frame, its
 //! power less twice the room's noise (`sound_level_db`), so that noise just under a
 //! sound neither hides it nor passes for speech around it.
-//! An enrolled take's onset is placed by the same stages, the take streamed after noise:
+//! An enrolled take's onset is placed by the same stages, run on the take after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
 //! first consonant (the "p" of "pew") is found; an impulse whose two placements differ
 //! is enrolled from both ([`super::enrol`]).
@@ -72,6 +73,7 @@ use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage, SOUND_DROP_DB};
 use super::onset::{OnsetDetector, OnsetParams};
 use super::pitch::PitchEstimator;
+use super::place::{Placer, PLACE_AFTER_FRAMES};
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
@@ -80,9 +82,6 @@ use crate::pattern::Pattern;
 /// (`GateParams::pre_quiet_db`).
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.010;
-/// An onset is placed on the samples this many frames after its detection, once the
-/// attack has arrived.
-const PLACE_AFTER_FRAMES: u64 = 3;
 /// Shift tolerance when comparing frames with a template.
 pub(super) const MAX_SHIFT: usize = 1;
 /// The noise floor rises this fast, dB per second, and falls this fast towards a quieter
@@ -90,10 +89,6 @@ pub(super) const MAX_SHIFT: usize = 1;
 const FLOOR_RISE_DB_PER_S: f32 = 3.0;
 const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 
-/// An onset is the first block within this many dB of the sound's loudest. Swept over
-/// every dev set from 9 to 20 dB, the mean F1 peaks here; wider ranges fall into the
-/// breath before a hit (`docs/onset-stage.md`).
-pub(super) const ONSET_RANGE_DB: f64 = 12.0;
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
 
@@ -120,15 +115,16 @@ struct FirstLook {
     peak: f32,
 }
 
+/// A placed onset waiting for its decision.
 #[derive(Clone, Copy)]
 struct PendingOnset {
-    /// Frame at which the onset was detected.
-    detected: u64,
+    /// The onset sample.
+    time_sample: u64,
+    /// The frame centred on it.
+    frame: u64,
     /// Decision windows its decision waits for: more than one once its two best
     /// patterns are a pair that one window cannot tell apart (`separating`).
     windows: usize,
-    /// Once placed: the onset sample and the frame centred on it.
-    placed: Option<(u64, u64)>,
 }
 
 /// Onset times (seconds, each at the centre of the frame where the onset function
@@ -208,7 +204,10 @@ pub struct SpectralMatcher {
     onsets: OnsetDetector,
     /// The broadband level of the room: follows quieter frames at once, rises slowly.
     noise_floor_db: f32,
+    placer: Placer,
     pending: Vec<PendingOnset>,
+    /// Placed onsets that found `pending` full.
+    pending_dropped: u64,
     held: HeldStage,
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
@@ -230,9 +229,6 @@ pub struct SpectralMatcher {
     extending: Option<ExtendingSpan>,
     speech_guard_seconds: f64,
     gates: GateParams,
-    /// The first onsets placed (samples), kept for [`take_onsets`]'s look at a take.
-    placed: [u64; PLACED_KEPT],
-    placed_count: usize,
     /// The last onset that fired (sample), and how near an onset may be placed to it:
     /// the onset stage's `min_gap_seconds`.
     last_fired: Option<u64>,
@@ -347,8 +343,6 @@ struct FiredImpulse {
     onset_frame: u64,
     strength: f64,
 }
-
-const PLACED_KEPT: usize = 8;
 
 /// See [`SpectralMatcher::continues_last_impulse`].
 const CONTINUATION_SLACK_SECONDS: f64 = 0.02;
@@ -536,7 +530,9 @@ impl SpectralMatcher {
                 rate,
             ),
             noise_floor_db: 0.0,
+            placer: Placer::new(analyzer.hop),
             pending: Vec::with_capacity(16),
+            pending_dropped: 0,
             held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
@@ -556,8 +552,6 @@ impl SpectralMatcher {
                 min_strength: settings.min_strength,
                 ..GateParams::default()
             },
-            placed: [0; PLACED_KEPT],
-            placed_count: 0,
             last_fired: None,
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
@@ -573,12 +567,6 @@ impl SpectralMatcher {
             take_power: vec![0.0; BANDS],
             collected: None,
         }
-    }
-
-    /// The first onsets placed (samples of stream), up to `PLACED_KEPT`: where the
-    /// stream put the onsets of what it heard first (enrolment's probe of a take).
-    pub(super) fn placed_onsets(&self) -> &[u64] {
-        &self.placed[..self.placed_count]
     }
 
     /// Keeps a record of every onset from now on (grows with the stream: offline).
@@ -679,6 +667,13 @@ impl SpectralMatcher {
         }
     }
 
+    /// Onsets detected but never classified because a bounded queue was full (onsets
+    /// are at least 20 ms apart and wait at most `max_decision_seconds`, so none on
+    /// any input so far).
+    pub fn dropped_onsets(&self) -> u64 {
+        self.placer.dropped() + self.pending_dropped
+    }
+
     pub fn finish(&mut self, out: &mut Vec<Event>) {
         if self.finished {
             return;
@@ -699,6 +694,12 @@ impl SpectralMatcher {
         }
         if let Some(h) = self.held.end() {
             self.close_held(h, out);
+        }
+        if self.dropped_onsets() > 0 {
+            tracing::warn!(
+                dropped = self.dropped_onsets(),
+                "onsets came faster than they were decided and some were never classified"
+            );
         }
         self.finished = true;
         let end_s = end as f64 / self.rate;
@@ -731,68 +732,53 @@ impl SpectralMatcher {
 
         self.extend_recognised(f);
         if let Some(onset) = self.onsets.push(&self.analyzer.power) {
+            self.placer.detected(onset.frame);
+        }
+        let oldest = self.consumed.saturating_sub(self.samples.len() as u64);
+        let samples = &self.samples;
+        while let Some(time_sample) =
+            self.placer
+                .next(self.frame_count, self.consumed, oldest, |n| {
+                    samples[ring_slot(samples, n)]
+                })
+        {
+            // Features start at the frame centred on the onset, as for takes.
+            let frame = (time_sample.saturating_sub(self.analyzer.win as u64 / 2) as f64
+                / self.analyzer.hop as f64)
+                .round() as u64;
             if self.pending.len() < self.pending.capacity() {
                 self.pending.push(PendingOnset {
-                    detected: onset.frame,
+                    time_sample,
+                    frame,
                     windows: 1,
-                    placed: None,
                 });
+            } else {
+                self.pending_dropped += 1;
             }
         }
         self.decide_pending(out);
         self.follow_held(f, out);
     }
 
-    /// The onset is in or just before frame `c`'s window: the first short block there
-    /// within `ONSET_RANGE_DB` of the loudest block up to now. (Asking it also to stand
-    /// 15 dB out of the noise floor, unless the sound is not that loud, was measured
-    /// and not adopted: `docs/onset-stage.md`.)
-    fn refine_onset(&self, c: u64) -> u64 {
-        let block = (self.hop() as u64 / 2).max(1);
-        let lo = self.frame_start(c.saturating_sub(2)).max(0) as u64;
-        let lo = lo.max(self.consumed.saturating_sub(self.samples.len() as u64));
-        first_window_within(
-            lo,
-            self.consumed,
-            block,
-            |n| self.sample(n),
-            |loudest| loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0),
-        )
-        .unwrap_or(lo)
-    }
-
     fn decide_pending(&mut self, out: &mut Vec<Event>) {
-        while let Some(onset) = self.pending.first_mut() {
-            let (time_sample, frame) = match onset.placed {
-                Some(placed) => placed,
-                None if self.frame_count > onset.detected + PLACE_AFTER_FRAMES => {
-                    let detected = onset.detected;
-                    let time_sample = self.refine_onset(detected);
-                    // Features start at the frame centred on the onset, as for takes.
-                    let frame = (time_sample.saturating_sub(self.analyzer.win as u64 / 2) as f64
-                        / self.hop() as f64)
-                        .round() as u64;
-                    // Two detections 20 ms apart can be placed on the same attack, the
-                    // first late in its search and the second early in its own: once
-                    // the first has fired, the second is that sound again.
-                    if self
-                        .last_fired
-                        .is_some_and(|last| time_sample < last + self.min_gap_samples)
-                    {
-                        self.pending.remove(0);
-                        self.explain_unscored(time_sample, Outcome::SameOnset);
-                        continue;
-                    }
-                    self.pending[0].placed = Some((time_sample, frame));
-                    if self.placed_count < PLACED_KEPT {
-                        self.placed[self.placed_count] = time_sample;
-                        self.placed_count += 1;
-                    }
-                    (time_sample, frame)
-                }
-                None => break,
-            };
-            let windows = self.pending[0].windows;
+        while let Some(&PendingOnset {
+            time_sample,
+            frame,
+            windows,
+        }) = self.pending.first()
+        {
+            // Two detections 20 ms apart can be placed on the same attack, the first
+            // late in its search and the second early in its own: once the first has
+            // fired, the second is that sound again.
+            if windows == 1
+                && self
+                    .last_fired
+                    .is_some_and(|last| time_sample < last + self.min_gap_samples)
+            {
+                self.pending.remove(0);
+                self.explain_unscored(time_sample, Outcome::SameOnset);
+                continue;
+            }
             if self.frame_count <= frame + (windows * self.decision_frames + MAX_SHIFT) as u64 {
                 break;
             }
@@ -1394,40 +1380,4 @@ impl SpectralMatcher {
             pitch,
         });
     }
-}
-
-/// The first start `n` in `[from, to - block]` of a window of `block` samples whose
-/// energy reaches `wanted(loudest)`, `loudest` being the greatest such window's energy
-/// there. Windows slide a sample at a time, so a signal shifted by some samples gives
-/// an onset shifted by as many, whatever the frames' grid (`sample(n)` reads sample
-/// `n`; nothing is allocated).
-pub(super) fn first_window_within(
-    from: u64,
-    to: u64,
-    block: u64,
-    sample: impl Fn(u64) -> f32,
-    wanted: impl Fn(f64) -> f64,
-) -> Option<u64> {
-    if to < from + block {
-        return None;
-    }
-    let power = |n: u64| f64::from(sample(n)).powi(2);
-    let mut energy: f64 = (from..from + block).map(power).sum();
-    let mut loudest = energy;
-    for n in from + block..to {
-        energy += power(n) - power(n - block);
-        loudest = loudest.max(energy);
-    }
-    let wanted = wanted(loudest);
-    let mut energy: f64 = (from..from + block).map(power).sum();
-    if energy >= wanted && energy > 0.0 {
-        return Some(from);
-    }
-    for n in from + block..to {
-        energy += power(n) - power(n - block);
-        if energy >= wanted && energy > 0.0 {
-            return Some(n + 1 - block);
-        }
-    }
-    None
 }
