@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Synthesises the speech of the built-in background model (src/detect/background.rs):
-# the English text of scripts/background/en.txt read by 24 espeak-ng voices, and a
+# the English text of scripts/background/en.txt read by 36 espeak-ng voices, and a
 # sentence each in German, French and Spanish. None is a voice of the development sets
 # (en+m1, en+m2, en+m7, en-us+f3, en-gb-x-rp+f1), of scripts/other-voices.py, or the
 # plain voice the tests speak with.
@@ -22,7 +22,9 @@ speak() { # NAME VOICE TEXT_FILE
 i=0
 for voice in en+f2 en+f4 en+m3 en+m5 en-us+m4 en+klatt3 en+Andy en+Annie \
   en-gb-scotland+m6 en-029+f5 en+grandma en+Storm en+adam en+Alex en+boris en+caleb \
-  en+john en+max en+michel en+norbert en+travis en+victor en+belinda en+Alicia; do
+  en+john en+max en+michel en+norbert en+travis en+victor en+belinda en+Alicia \
+  en+Andrea en-us+Benjamin en+Denis en-029+Gene en-us+Hugo en+Iven \
+  en-gb-scotland+Lee en-us+Michael en+Mike en-029+Paul en+Quincy en-us+Rob; do
   speak "en_$i" "$voice" "$here/background/en.txt"
   i=$((i + 1))
 done
