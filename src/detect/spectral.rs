@@ -332,10 +332,8 @@ impl PatternScore {
 /// See [`SpectralMatcher::track`]: how far each confident instance moves the tracked
 /// template...
 const TRACK_RATE: f32 = 0.5;
-/// ...confident meaning at least this far over the pattern's threshold...
+/// ...confident meaning at least this far over the pattern's threshold.
 const TRACK_CONFIDENCE: f32 = 0.15;
-/// ...and this far over every other pattern.
-const TRACK_MARGIN: f32 = 0.05;
 
 #[derive(Clone, Copy)]
 struct FiredImpulse {
@@ -1168,12 +1166,14 @@ impl SpectralMatcher {
     /// Follows a voice that drifts: a performer's "k" an hour in is not the "k" of
     /// the take. Each impulse pattern has a tracked template besides its takes, scored
     /// as they are. An instance of pattern `pi` recognised with confidence (at least
-    /// `TRACK_CONFIDENCE` over its threshold and `TRACK_MARGIN` over every other
-    /// pattern) becomes it the first time, and then moves it by `TRACK_RATE` towards
-    /// itself. The takes stay as enrolled, and every pattern has one tracked template
-    /// however many takes it has, so no pattern gains weight by being heard more. The
-    /// rate and the confidence are swept over every dev set in `docs/classify.md`
-    /// (without tracking the mean F1 falls by 0.034, most of it on real hits). A new
+    /// `TRACK_CONFIDENCE` over its threshold, its pattern the best over the first
+    /// window, whose features are what is tracked) becomes it the first time, and then
+    /// moves it by `TRACK_RATE` towards itself. The takes stay as enrolled, and every
+    /// pattern has one tracked template however many takes it has, so no pattern gains
+    /// weight by being heard more. The rate and the confidence are swept over every dev
+    /// set in `docs/classify.md` (without tracking the mean F1 falls by 0.034, most of
+    /// it on real hits); asking the instance also to stand a margin over every other
+    /// pattern kept hits alike from following their voice (the sweep there). A new
     /// template from every confident instance instead (up to 8 per pattern) cost the
     /// isolated set of `examples/eval_beatbox.rs` at 30-120 ms gaps 0.07-0.09 when it
     /// was tried (with plain correlations, before `LIFTER_POWER`).
@@ -1186,7 +1186,7 @@ impl SpectralMatcher {
             .filter(|&(p, _)| p != pi)
             .map(|(_, s)| s.score)
             .fold(f32::NEG_INFINITY, f32::max);
-        if best < self.patterns[pi].threshold + TRACK_CONFIDENCE || best - second < TRACK_MARGIN {
+        if best < self.patterns[pi].threshold + TRACK_CONFIDENCE || best < second {
             return;
         }
         let tracked = &mut self.tracked[pi * FEATURES..(pi + 1) * FEATURES];
