@@ -381,8 +381,9 @@ const ALIKE_SIMILARITY: f32 = 0.7;
 
 /// A recognised impulse covers its take's length from its onset, and longer while its
 /// sound stays within `SOUND_DROP_DB` of its peak (said more slowly than enrolled), up to
-/// this many times the take's length.
-const SPAN_STRETCH: u64 = 2;
+/// this many times the take's length. Swept over every dev set (`docs/speech-guard.md`):
+/// 4 to 10 score alike; 2 loses words of the rhythms at 150 bpm.
+const SPAN_STRETCH: u64 = 4;
 
 #[derive(Clone, Copy)]
 struct ExtendingSpan {
