@@ -9,9 +9,9 @@ use super::features::{
     features_of_power, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
     HOP_SECONDS, WINDOW_SECONDS,
 };
-use super::onset::{OnsetDetector, OnsetParams};
+use super::onset::OnsetParams;
 use super::place::{first_window_within, Placer, ONSET_RANGE_DB, PLACE_AFTER_FRAMES};
-use super::spectral::MAX_SHIFT;
+use super::spectral::{run_onset_stage, MAX_SHIFT};
 use super::{white_noise, NOISE_SEED};
 use crate::config::{DetectorSettings, PatternKind};
 
@@ -366,47 +366,29 @@ fn probe_onset(
 }
 
 /// Where a stream places the onsets of `signal` (at `rate`), samples: the features,
-/// onset and placement stages as the spectral matcher runs them, frame by frame.
+/// onset and placement stages as the spectral matcher runs them, frame by frame, and on
+/// into silence after it, so that an onset in its last frames is placed too (as a
+/// stream's end is).
 fn placed_onsets(signal: &[f32], rate: f64) -> Vec<u64> {
-    let mut analyzer = Analyzer::new(rate);
-    let (win, hop) = (analyzer.win, analyzer.hop);
-    let mut onsets = OnsetDetector::new(
-        OnsetParams::default(),
-        &analyzer.band_bins(),
-        win,
-        hop,
-        rate,
-    );
+    let hop = Analyzer::hop_at(rate);
     let mut placer = Placer::new(hop);
-    // Silence after the signal, so that an onset in its last frames is placed too (as a
-    // stream's end is).
-    let padded: Vec<f32> = signal
-        .iter()
-        .copied()
-        .chain(std::iter::repeat_n(
-            0.0,
-            (PLACE_AFTER_FRAMES as usize + 2) * hop + win,
-        ))
-        .collect();
-    let signal = &padded;
-    let mut frame = vec![0.0f32; BANDS];
     let mut placed = Vec::new();
-    let mut frames = 0u64;
-    // A frame is made every hop once a window's samples have arrived.
-    let mut consumed = hop;
-    while consumed <= signal.len() {
-        if consumed >= win {
-            analyzer.frame(&signal[consumed - win..consumed], &mut frame);
-            frames += 1;
-            if let Some(onset) = onsets.push(&analyzer.power) {
+    let sample = |n: u64| signal.get(n as usize).copied().unwrap_or(0.0);
+    let tail = PLACE_AFTER_FRAMES as usize + 2;
+    run_onset_stage(
+        signal,
+        rate,
+        OnsetParams::default(),
+        tail,
+        |frames, consumed, onset| {
+            if let Some(onset) = onset {
                 placer.detected(onset.frame);
             }
-            while let Some(at) = placer.next(frames, consumed as u64, 0, |n| signal[n as usize]) {
+            while let Some(at) = placer.next(frames, consumed, 0, sample) {
                 placed.push(at);
             }
-        }
-        consumed += hop;
-    }
+        },
+    );
     placed
 }
 

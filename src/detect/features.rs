@@ -55,7 +55,7 @@ pub(super) struct Analyzer {
 impl Analyzer {
     pub(super) fn new(rate: f64) -> Self {
         let win = ((WINDOW_SECONDS * rate).round() as usize).max(32);
-        let hop = ((HOP_SECONDS * rate).round() as usize).max(1);
+        let hop = Self::hop_at(rate);
         let fft = RealFftPlanner::<f32>::new().plan_fft_forward(win);
         let window = (0..win)
             .map(|i| {
@@ -111,6 +111,11 @@ impl Analyzer {
             cepstrum: cepstrum_basis(),
             power: vec![0.0; BANDS],
         }
+    }
+
+    /// Samples between frames at `rate`.
+    pub(super) fn hop_at(rate: f64) -> usize {
+        ((HOP_SECONDS * rate).round() as usize).max(1)
     }
 
     /// Per band: the effective number of spectral bins its filter sums, (sum w)^2 /

@@ -71,7 +71,7 @@ use super::features::{
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage, SOUND_DROP_DB};
-use super::onset::{OnsetDetector, OnsetParams};
+use super::onset::{Onset, OnsetDetector, OnsetParams};
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
 use super::Event;
@@ -131,20 +131,47 @@ struct PendingOnset {
 /// peaked) that the onset stage with `params` finds in `samples` at `rate` Hz, through
 /// the matcher's own frames: for measuring the stage alone (`examples/onset_sweep.rs`).
 pub fn onset_times(samples: &[f32], rate: f64, params: OnsetParams) -> Vec<f64> {
+    let mut frames = Vec::new();
+    let (win, hop) = run_onset_stage(samples, rate, params, 0, |_, _, onset| {
+        frames.extend(onset.map(|o| o.frame));
+    });
+    frames
+        .iter()
+        .map(|&f| (f as usize * hop + win / 2) as f64 / rate)
+        .collect()
+}
+
+/// Runs the features and onset stages (with `params`) over `samples` at `rate`, offline,
+/// on a stream's schedule (a frame every hop once a window's samples have arrived), and
+/// on through `tail_frames` frames of silence after them: `each(frames made, samples
+/// consumed, the onset the stage found at that frame)`. Returns the frames' window and
+/// hop, in samples.
+pub(super) fn run_onset_stage(
+    samples: &[f32],
+    rate: f64,
+    params: OnsetParams,
+    tail_frames: usize,
+    mut each: impl FnMut(u64, u64, Option<Onset>),
+) -> (usize, usize) {
     let mut analyzer = Analyzer::new(rate);
     let (win, hop) = (analyzer.win, analyzer.hop);
     let mut onsets = OnsetDetector::new(params, &analyzer.band_bins(), win, hop, rate);
+    let mut window = vec![0.0f32; win];
     let mut frame = vec![0.0f32; BANDS];
-    let mut found = Vec::new();
-    let mut start = 0;
-    while start + win <= samples.len() {
-        analyzer.frame(&samples[start..start + win], &mut frame);
-        if let Some(onset) = onsets.push(&analyzer.power) {
-            found.push((onset.frame as usize * hop + win / 2) as f64 / rate);
+    let mut frames = 0u64;
+    let mut consumed = hop;
+    while consumed <= samples.len() + tail_frames * hop {
+        if consumed >= win {
+            for (k, w) in window.iter_mut().enumerate() {
+                *w = samples.get(consumed - win + k).copied().unwrap_or(0.0);
+            }
+            analyzer.frame(&window, &mut frame);
+            frames += 1;
+            each(frames, consumed as u64, onsets.push(&analyzer.power));
         }
-        start += hop;
+        consumed += hop;
     }
-    found
+    (win, hop)
 }
 
 /// The level of the sound in a frame of `level_db`, over a room whose noise is at
