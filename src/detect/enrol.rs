@@ -384,7 +384,7 @@ fn placed_onsets(signal: &[f32], rate: f64) -> Vec<u64> {
             if let Some(onset) = onset {
                 placer.detected(onset.frame);
             }
-            while let Some(at) = placer.next(frames, consumed, 0, sample) {
+            while let Some(at) = placer.next(frames, consumed, 0, 0.0, sample) {
                 placed.push(at);
             }
         },

@@ -2,9 +2,9 @@
 //! Onset functions peak on the frames' grid, a few milliseconds into an attack; an
 //! onset is placed `PLACE_AFTER_FRAMES` frames after its detection, once the attack has
 //! arrived, on the first short window of samples within `ONSET_RANGE_DB` of the
-//! loudest one since two frames before the detection. Windows slide a sample at a
-//! time, so a signal a few samples later gives an onset as many samples later, wherever
-//! the frames fall.
+//! loudest one since two frames before the detection that stands `OVER_NOISE` times
+//! over the room's noise. Windows slide a sample at a time, so a signal a few samples
+//! later gives an onset as many samples later, wherever the frames fall.
 //!
 //! It knows nothing of patterns or of what became of an onset, so its placements do
 //! not depend on any decision. The same stage places a stream's onsets (inside the
@@ -22,6 +22,15 @@ pub(super) const PLACE_AFTER_FRAMES: u64 = 3;
 /// every dev set from 9 to 20 dB, the mean F1 peaks here; wider ranges fall into the
 /// breath before a hit (`docs/onset-stage.md`).
 pub(super) const ONSET_RANGE_DB: f64 = 12.0;
+
+/// ...and whose energy is at least this many times the room's noise in as long a window
+/// (or is the loudest). A sound whose first milliseconds lie within 12 dB of the noise
+/// (a fricative at -11 dB in a -50 dB room) would otherwise be placed in the noise
+/// before it. A window of `hop / 2` samples of white noise holds some 32 independent
+/// samples and never reaches 4 times its mean; noise as narrow as a hum, about two
+/// degrees of freedom per window, does once in 50 windows. Swept 2-8 over every dev
+/// set, a plateau from 3 to 6 (`docs/onset-stage.md`).
+pub(super) const OVER_NOISE: f64 = 4.0;
 
 /// Onsets detected and not yet placed: at most one per `min_gap_seconds` (20 ms) within
 /// `PLACE_AFTER_FRAMES` frames, so a handful would do.
@@ -67,12 +76,14 @@ impl Placer {
 
     /// The next onset whose placement is due, once `frames` frames have been computed
     /// and `consumed` samples received (`oldest`: the oldest sample `sample(n)` can
-    /// still read): its sample. Call until `None` after every frame.
+    /// still read; `noise_power`: the room's noise, mean power per sample): its
+    /// sample. Call until `None` after every frame.
     pub(super) fn next(
         &mut self,
         frames: u64,
         consumed: u64,
         oldest: u64,
+        noise_power: f64,
         sample: impl Fn(u64) -> f32,
     ) -> Option<u64> {
         if self.len == 0 {
@@ -87,9 +98,12 @@ impl Placer {
         // Two frames before the detection: the frame whose window first held the attack.
         let from = (detected.saturating_sub(2) * self.hop).max(oldest);
         let block = (self.hop / 2).max(1);
+        let noise = OVER_NOISE * noise_power * block as f64;
         Some(
             first_window_within(from, consumed, block, sample, |loudest| {
-                loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0)
+                (loudest * 10f64.powf(-ONSET_RANGE_DB / 10.0))
+                    .max(noise)
+                    .min(loudest)
             })
             .unwrap_or(from),
         )
@@ -158,13 +172,19 @@ mod tests {
             (consumed, frames)
         };
         let (consumed, frames) = at(detected + PLACE_AFTER_FRAMES);
-        assert_eq!(placer.next(frames, consumed, 0, |n| x[n as usize]), None);
+        assert_eq!(
+            placer.next(frames, consumed, 0, 0.0, |n| x[n as usize]),
+            None
+        );
         let (consumed, frames) = at(detected + PLACE_AFTER_FRAMES + 1);
-        let placed = placer.next(frames, consumed, 0, |n| x[n as usize]);
+        let placed = placer.next(frames, consumed, 0, 0.0, |n| x[n as usize]);
         // The first 32-sample window within 12 dB of one full of the burst holds 3 of
         // its samples (2 are 0.06 of its power, 3 are 0.09; -12 dB is 0.063).
         assert_eq!(placed, Some(1000 - 29));
-        assert_eq!(placer.next(frames, consumed, 0, |n| x[n as usize]), None);
+        assert_eq!(
+            placer.next(frames, consumed, 0, 0.0, |n| x[n as usize]),
+            None
+        );
     }
 
     #[test]
@@ -176,10 +196,44 @@ mod tests {
             placer.detected(detected);
             let frames = detected + PLACE_AFTER_FRAMES + 1;
             let consumed = (frames - 1) * HOP as u64 + 256;
-            placer.next(frames, consumed, 0, |n| x[n as usize]).unwrap()
+            placer
+                .next(frames, consumed, 0, 0.0, |n| x[n as usize])
+                .unwrap()
         };
         // Same frame of detection, the burst 5 samples later.
         assert_eq!(place(1029) - place(1024), 5);
+    }
+
+    #[test]
+    fn a_sound_that_begins_as_loud_as_the_noise_is_placed_where_it_rises_out_of_it() {
+        // The room's noise: power 1 per sample. From 800 a sound as loud as the noise
+        // (power 2 with it), from 1000 its body (power 9), 9.5 dB over its beginning.
+        let x: Vec<f32> = (0..4000)
+            .map(|n| {
+                let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+                sign * match n {
+                    0..800 => 1.0f32,
+                    800..1000 => 2f32.sqrt(),
+                    _ => 3.0,
+                }
+            })
+            .collect();
+        let place = |noise_power: f64| {
+            let mut placer = Placer::new(HOP);
+            let detected = 1000 / HOP as u64 + 1;
+            placer.detected(detected);
+            let frames = detected + PLACE_AFTER_FRAMES + 1;
+            let consumed = (frames - 1) * HOP as u64 + 256;
+            placer
+                .next(frames, consumed, 0, noise_power, |n| x[n as usize])
+                .unwrap()
+        };
+        // In a silent room the beginning is within 12 dB of the body: the onset goes
+        // to the start of the search, two frames before the detection.
+        assert_eq!(place(0.0), (1000 / HOP as u64 - 1) * HOP as u64);
+        // Over this noise, the first 32-sample window 4 times the noise holds 10
+        // samples of the body (9 * 10 + 2 * 22 = 134 >= 128; 9 of them give 127).
+        assert_eq!(place(1.0), 1000 - 22);
     }
 
     #[test]
@@ -193,10 +247,15 @@ mod tests {
         let consumed = 30_000;
         let mut last = 0;
         for _ in 0..WAITING {
-            let placed = placer.next(1_000, consumed, 0, |n| x[n as usize]).unwrap();
+            let placed = placer
+                .next(1_000, consumed, 0, 0.0, |n| x[n as usize])
+                .unwrap();
             assert!(placed > last || last == 0, "{placed} after {last}");
             last = placed;
         }
-        assert_eq!(placer.next(1_000, consumed, 0, |n| x[n as usize]), None);
+        assert_eq!(
+            placer.next(1_000, consumed, 0, 0.0, |n| x[n as usize]),
+            None
+        );
     }
 }

@@ -762,9 +762,11 @@ impl SpectralMatcher {
         }
         let oldest = self.consumed.saturating_sub(self.samples.len() as u64);
         let samples = &self.samples;
+        // The room's noise for placement: the level of its quietest frames.
+        let noise_power = 10f64.powf(f64::from(self.noise_floor_db) / 10.0);
         while let Some(time_sample) =
             self.placer
-                .next(self.frame_count, self.consumed, oldest, |n| {
+                .next(self.frame_count, self.consumed, oldest, noise_power, |n| {
                     samples[ring_slot(samples, n)]
                 })
         {
