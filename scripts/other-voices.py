@@ -12,11 +12,19 @@ check of a change the first six had a say in:
 
     ~/.cache/onomato-devsets-venv/bin/python scripts/other-voices.py --more /tmp/more-voices
 
+With --exact, the exact-copies protocol (D5_exact: copies of the takes at -12..0 dB in
+noise 50 dB down, gaps 80-500 ms) for words of those twelve voices, many of them opening
+on a soft consonant ("fish", "sip", "thin", "hat"), in six sets of three:
+
+    ~/.cache/onomato-devsets-venv/bin/python scripts/other-voices.py --exact /tmp/exact-more
+
 Keep it a check: a setting chosen on these voices is fitted to them as well.
 """
 
 import pathlib
 import sys
+
+import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
@@ -45,14 +53,62 @@ MORE_VOICES = [
 ]
 
 
+# (set suffix, {word: espeak-ng voice}) for --exact: the voices above, other words.
+EXACT_SETS = [
+    ("a", {"fish": "en+m8", "tap": "en+klatt", "on": "en-us+linda"}),
+    ("b", {"sip": "en-gb-x-gbclan+edward", "kick": "en-us-nyc+david", "flick": "en-gb-x-gbcwmd+steph"}),
+    ("c", {"shot": "en+Antonio", "dunk": "en-us+Auntie", "hat": "en+Diogo"}),
+    ("d", {"thin": "en-gb-scotland+Gustave", "ping": "en+Jacky", "fuzz": "en-029+Marco"}),
+    ("e", {"flick": "en+m8", "sip": "en-us+linda", "pop": "en+klatt"}),
+    ("f", {"fish": "en-us-nyc+david", "shot": "en-gb-x-gbcwmd+steph", "tick": "en+Antonio"}),
+]
+
+
+def exact_copies(out, short, words):
+    """The protocol of the dev sets' d5_exact for `words` (word: voice)."""
+    name = f"D5_exact_{short}"
+    rng = build.rng_for(name)
+    sr = 48000
+    takes = {}
+    for word, voice in words.items():
+        x = build.espeak(word, voice, sr)
+        e = np.abs(x)
+        idx = np.nonzero(e > 0.05 * e.max())[0]
+        takes[word] = x[idx[0]:idx[-1] + 1]
+    names = sorted(takes)
+    seqs = []
+    for _ in range(2):
+        n = int(15 * sr)
+        s = 10 ** (-50 / 20) * rng.standard_normal(n)
+        rows, t = [], int(0.3 * sr)
+        while True:
+            k = names[rng.integers(len(names))]
+            p = takes[k]
+            if t + len(p) > n - sr // 5:
+                break
+            g = 10 ** (rng.uniform(-12, 0) / 20)
+            s[t:t + len(p)] += g * p
+            rows.append((t / sr, k, "", g))
+            t += len(p) + int(rng.uniform(0.08, 0.5) * sr)
+        seqs.append((s, rows))
+    about = "exact copies: " + ", ".join(f"{w} ({v})" for w, v in words.items()) + "; onset = first sample"
+    build.save_set(out / name, takes, {k: "impulse" for k in takes}, seqs, sr, subtype="FLOAT", digits=6,
+                   about=about)
+
+
 def main():
     args = sys.argv[1:]
     more = "--more" in args
-    args = [a for a in args if a != "--more"]
-    if len(args) != 1:
+    exact = "--exact" in args
+    args = [a for a in args if a not in ("--more", "--exact")]
+    if len(args) != 1 or (more and exact):
         sys.exit(__doc__)
     out = pathlib.Path(args[0])
     out.mkdir(parents=True, exist_ok=True)
+    if exact:
+        for short, words in EXACT_SETS:
+            exact_copies(out, short, words)
+        return
     for voice, short, words in MORE_VOICES if more else VOICES:
         build.d4_voice(out, voice, short, words)
         build.n_speech_espeak(out, voice, short)

@@ -384,6 +384,9 @@ fn placed_onsets(signal: &[f32], rate: f64) -> Vec<u64> {
             if let Some(onset) = onset {
                 placer.detected(onset.frame);
             }
+            // Without the condition on the room's noise: with it, the loud room moves
+            // some takes' onsets past a soft first consonant, and an unheard voice's
+            // "pop" was then taken for its "pew" (`docs/onset-stage.md`).
             while let Some(at) = placer.next(frames, consumed, 0, 0.0, sample) {
                 placed.push(at);
             }
