@@ -12,7 +12,8 @@
 //! that is the take as enrolled.
 
 use super::features::{features_of_power, scale_to_unit, Analyzer};
-use super::onset::{OnsetDetector, OnsetParams};
+use super::onset::OnsetParams;
+use super::spectral::run_onset_stage;
 use super::{white_noise, NOISE_SEED};
 use std::sync::Mutex;
 
@@ -27,29 +28,21 @@ const CALIBRATION_SECONDS: f64 = 2.0;
 /// depend on the noise's level, and within a band little on its colour: it is
 /// measured once, on seeded white noise through the same analysis and onset stage as
 /// the stream.
-pub(super) fn noise_over_floor(
-    analyzer: &mut Analyzer,
-    params: OnsetParams,
-    rate: f64,
-) -> Vec<f32> {
-    let bins = analyzer.band_bins();
-    let bands = bins.len();
-    let (win, hop) = (analyzer.win, analyzer.hop);
-    let mut onsets = OnsetDetector::new(params, &bins, win, hop, rate);
+pub(super) fn noise_over_floor(params: OnsetParams, rate: f64) -> Vec<f32> {
+    let analyzer = Analyzer::new(rate);
+    let (bands, win) = (analyzer.band_bins().len(), analyzer.win);
     let settle = (CALIBRATION_SECONDS * rate) as usize;
     let noise = white_noise(2 * settle + win, 0.5, NOISE_SEED);
-    let mut frame = vec![0.0f32; bands];
     let (mut mean, mut floor) = (vec![0.0f64; bands], vec![0.0f64; bands]);
-    for start in (0..=2 * settle).step_by(hop) {
-        analyzer.frame(&noise[start..start + win], &mut frame);
-        onsets.push(&analyzer.power);
-        if start >= settle {
+    run_onset_stage(&noise, rate, params, 0, |step| {
+        // Frames whose window starts once the floors have settled.
+        if step.consumed as usize >= settle + win {
             for b in 0..bands {
-                mean[b] += f64::from(analyzer.power[b]);
-                floor[b] += f64::from(onsets.band_floors()[b]);
+                mean[b] += f64::from(step.power[b]);
+                floor[b] += f64::from(step.floors[b]);
             }
         }
-    }
+    });
     mean.iter()
         .zip(&floor)
         .map(|(m, f)| if *f > 0.0 { (m / f) as f32 } else { 1.0 })
@@ -58,8 +51,8 @@ pub(super) fn noise_over_floor(
 
 /// [`noise_over_floor`] of the default onset stage at `rate`, measured once per rate in a
 /// process: every detector built after the first (a reload, each take that `record`
-/// checks) reuses it. `analyzer` must analyse at `rate`.
-pub(super) fn default_noise_over_floor(analyzer: &mut Analyzer, rate: f64) -> Vec<f32> {
+/// checks) reuses it.
+pub(super) fn default_noise_over_floor(rate: f64) -> Vec<f32> {
     static MEASURED: Mutex<Vec<(u64, Vec<f32>)>> = Mutex::new(Vec::new());
     // A panic while measuring leaves nothing half-written: the list is only pushed to.
     let mut measured = MEASURED
@@ -68,7 +61,7 @@ pub(super) fn default_noise_over_floor(analyzer: &mut Analyzer, rate: f64) -> Ve
     if let Some((_, ratio)) = measured.iter().find(|(r, _)| *r == rate.to_bits()) {
         return ratio.clone();
     }
-    let ratio = noise_over_floor(analyzer, OnsetParams::default(), rate);
+    let ratio = noise_over_floor(OnsetParams::default(), rate);
     measured.push((rate.to_bits(), ratio.clone()));
     ratio
 }
@@ -151,14 +144,15 @@ impl Room {
 #[cfg(test)]
 mod tests {
     use super::super::features::{cepstrum_basis, pool_power, similarity, BANDS, FEATURES};
+    use super::super::onset::OnsetDetector;
     use super::*;
 
     const RATE: f64 = 22_050.0;
 
     #[test]
     fn the_floor_lies_under_the_noise_the_more_the_narrower_the_band() {
-        let mut analyzer = Analyzer::new(RATE);
-        let ratio = noise_over_floor(&mut analyzer, OnsetParams::default(), RATE);
+        let analyzer = Analyzer::new(RATE);
+        let ratio = noise_over_floor(OnsetParams::default(), RATE);
         let bins = analyzer.band_bins();
         assert!(ratio.iter().all(|&r| r > 1.5), "{ratio:?}");
         // A one-bin band wanders most: its floor lies furthest under its mean.
@@ -205,7 +199,7 @@ mod tests {
     fn a_take_heard_in_the_onsets_room_matches_its_copy_in_noise() {
         let mut analyzer = Analyzer::new(RATE);
         let basis = cepstrum_basis();
-        let ratio = noise_over_floor(&mut analyzer, OnsetParams::default(), RATE);
+        let ratio = noise_over_floor(OnsetParams::default(), RATE);
         let n = 4096;
         let take = buzz(n);
         // The same sound in a room whose hiss fills the bands it leaves empty.

@@ -231,8 +231,7 @@ pub(super) fn take_features(
         analyzer.frame(&padded[a..b], &mut frame);
         frames[f * BANDS..(f + 1) * BANDS].copy_from_slice(&frame);
     }
-    let onset =
-        ((lead + onset_in_take).saturating_sub(win / 2) as f64 / hop as f64).round() as usize;
+    let onset = analyzer.frame_centred_on((lead + onset_in_take) as u64) as usize;
     let onset = onset.min(n_frames - 1);
     let early_len = decision_frames * hop;
     let onset_sample = lead + onset_in_take;
@@ -375,23 +374,17 @@ fn placed_onsets(signal: &[f32], rate: f64) -> Vec<u64> {
     let mut placed = Vec::new();
     let sample = |n: u64| signal.get(n as usize).copied().unwrap_or(0.0);
     let tail = PLACE_AFTER_FRAMES as usize + 2;
-    run_onset_stage(
-        signal,
-        rate,
-        OnsetParams::default(),
-        tail,
-        |frames, consumed, onset| {
-            if let Some(onset) = onset {
-                placer.detected(onset.frame);
-            }
-            // Without the condition on the room's noise: with it, the loud room moves
-            // some takes' onsets past a soft first consonant, and an unheard voice's
-            // "pop" was then taken for its "pew" (`docs/onset-stage.md`).
-            while let Some(at) = placer.next(frames, consumed, 0, 0.0, sample) {
-                placed.push(at);
-            }
-        },
-    );
+    run_onset_stage(signal, rate, OnsetParams::default(), tail, |step| {
+        if let Some(onset) = step.onset {
+            placer.detected(onset.frame);
+        }
+        // Without the condition on the room's noise: with it, the loud room moves
+        // some takes' onsets past a soft first consonant, and an unheard voice's
+        // "pop" was then taken for its "pew" (`docs/onset-stage.md`).
+        while let Some(at) = placer.next(step.frames, step.consumed, 0, 0.0, sample) {
+            placed.push(at);
+        }
+    });
     placed
 }
 

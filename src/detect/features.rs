@@ -118,6 +118,18 @@ impl Analyzer {
         ((HOP_SECONDS * rate).round() as usize).max(1)
     }
 
+    /// The sample at the centre of frame `f`'s window (frame 0's window starts at
+    /// sample 0).
+    pub(super) fn frame_centre(&self, f: u64) -> u64 {
+        f * self.hop as u64 + self.win as u64 / 2
+    }
+
+    /// The frame whose window is centred nearest `sample`: where an onset's features
+    /// start, in a stream and in a take alike.
+    pub(super) fn frame_centred_on(&self, sample: u64) -> u64 {
+        (sample.saturating_sub(self.win as u64 / 2) as f64 / self.hop as f64).round() as u64
+    }
+
     /// Per band: the effective number of spectral bins its filter sums, (sum w)^2 /
     /// sum w^2 for its weights w.
     pub(super) fn band_bins(&self) -> Vec<f32> {

@@ -132,8 +132,8 @@ struct PendingOnset {
 /// the matcher's own frames: for measuring the stage alone (`examples/onset_sweep.rs`).
 pub fn onset_times(samples: &[f32], rate: f64, params: OnsetParams) -> Vec<f64> {
     let mut frames = Vec::new();
-    let (win, hop) = run_onset_stage(samples, rate, params, 0, |_, _, onset| {
-        frames.extend(onset.map(|o| o.frame));
+    let (win, hop) = run_onset_stage(samples, rate, params, 0, |step| {
+        frames.extend(step.onset.map(|o| o.frame));
     });
     frames
         .iter()
@@ -141,17 +141,29 @@ pub fn onset_times(samples: &[f32], rate: f64, params: OnsetParams) -> Vec<f64> 
         .collect()
 }
 
+/// One frame of [`run_onset_stage`].
+pub(super) struct OnsetStep<'a> {
+    /// Frames made so far, this one included.
+    pub(super) frames: u64,
+    /// Samples consumed: this frame's window ends here.
+    pub(super) consumed: u64,
+    /// The onset the stage found at this frame.
+    pub(super) onset: Option<Onset>,
+    /// The frame's band powers (linear) and the onset stage's band floors after it.
+    pub(super) power: &'a [f32],
+    pub(super) floors: &'a [f32],
+}
+
 /// Runs the features and onset stages (with `params`) over `samples` at `rate`, offline,
 /// on a stream's schedule (a frame every hop once a window's samples have arrived), and
-/// on through `tail_frames` frames of silence after them: `each(frames made, samples
-/// consumed, the onset the stage found at that frame)`. Returns the frames' window and
-/// hop, in samples.
+/// on through `tail_frames` frames of silence after them, calling `each` after every
+/// frame. Returns the frames' window and hop, in samples.
 pub(super) fn run_onset_stage(
     samples: &[f32],
     rate: f64,
     params: OnsetParams,
     tail_frames: usize,
-    mut each: impl FnMut(u64, u64, Option<Onset>),
+    mut each: impl FnMut(OnsetStep),
 ) -> (usize, usize) {
     let mut analyzer = Analyzer::new(rate);
     let (win, hop) = (analyzer.win, analyzer.hop);
@@ -167,7 +179,14 @@ pub(super) fn run_onset_stage(
             }
             analyzer.frame(&window, &mut frame);
             frames += 1;
-            each(frames, consumed as u64, onsets.push(&analyzer.power));
+            let onset = onsets.push(&analyzer.power);
+            each(OnsetStep {
+                frames,
+                consumed: consumed as u64,
+                onset,
+                power: &analyzer.power,
+                floors: onsets.band_floors(),
+            });
         }
         consumed += hop;
     }
@@ -534,7 +553,7 @@ impl SpectralMatcher {
         let noise_over_floor = if templates.is_empty() {
             vec![1.0; BANDS]
         } else {
-            default_noise_over_floor(&mut analyzer, rate)
+            default_noise_over_floor(rate)
         };
         Self {
             rate,
@@ -770,10 +789,7 @@ impl SpectralMatcher {
                     samples[ring_slot(samples, n)]
                 })
         {
-            // Features start at the frame centred on the onset, as for takes.
-            let frame = (time_sample.saturating_sub(self.analyzer.win as u64 / 2) as f64
-                / self.analyzer.hop as f64)
-                .round() as u64;
+            let frame = self.analyzer.frame_centred_on(time_sample);
             if self.pending.len() < self.pending.capacity() {
                 self.pending.push(PendingOnset {
                     time_sample,
@@ -1126,7 +1142,7 @@ impl SpectralMatcher {
     fn over_fired_impulse(&self, time_sample: u64) -> bool {
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         self.frames_inside(quiet_from, quiet_to).any(|f| {
-            let centre = self.frame_centre(f);
+            let centre = self.analyzer.frame_centre(f);
             self.recognised
                 .iter()
                 .any(|span| span.fired && span.holds(centre))
@@ -1138,11 +1154,6 @@ impl SpectralMatcher {
     fn quiet_before_span(&self, time_sample: u64) -> (u64, u64) {
         let before = |seconds: f64| time_sample.saturating_sub((seconds * self.rate) as u64);
         (before(PRE_QUIET_FROM_SECONDS), before(PRE_QUIET_TO_SECONDS))
-    }
-
-    /// The sample at the centre of frame `f`'s window.
-    fn frame_centre(&self, f: u64) -> u64 {
-        f * self.hop() as u64 + self.analyzer.win as u64 / 2
     }
 
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
@@ -1321,7 +1332,7 @@ impl SpectralMatcher {
     fn extend_recognised(&mut self, f: u64) {
         let Some(mut e) = self.extending else { return };
         let level = self.levels[(f % self.frame_capacity as u64) as usize];
-        let centre = self.frame_centre(f);
+        let centre = self.analyzer.frame_centre(f);
         if level < e.peak_db - SOUND_DROP_DB || centre > e.limit {
             self.extending = None;
             return;
@@ -1348,7 +1359,7 @@ impl SpectralMatcher {
         let needed = (GUARD_SOUND_SECONDS * self.rate / hop as f64).ceil() as usize;
         self.frames_inside(from, to)
             .filter(|&f| {
-                let centre = self.frame_centre(f);
+                let centre = self.analyzer.frame_centre(f);
                 self.levels[(f % cap) as usize] >= peak - GUARD_DB
                     && !self.recognised.iter().any(|span| span.holds(centre))
             })
