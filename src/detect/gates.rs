@@ -11,7 +11,7 @@ use serde::Serialize;
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
     Fired,
-    /// The 10-40 ms before the onset were within `pre_quiet_db` of its peak: it
+    /// The 5-40 ms before the onset were within `pre_quiet_db` of its peak: it
     /// continues a sound (a consonant after a vowel). Not asked of an impulse that
     /// scores `over_fired_score` over the tail of an impulse that fired.
     QuietBefore,
@@ -51,9 +51,9 @@ impl Outcome {
 /// The gates' settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GateParams {
-    /// A sound must rise this far (dB) above the 10-40 ms before its onset...
+    /// A sound must rise this far (dB) above the 5-40 ms before its onset...
     pub pre_quiet_db: f32,
-    /// ...unless those 10-40 ms lie in an impulse that fired (a word of a quick rhythm
+    /// ...unless those 5-40 ms lie in an impulse that fired (a word of a quick rhythm
     /// begins over the tail of the word before) and its best pattern, an impulse,
     /// scores at least this. The gate is there to keep the consonants inside
     /// unrecognised sound (speech) out; over a recognised word it would stop every
@@ -83,9 +83,9 @@ impl Default for GateParams {
 /// What the stages found out about one onset.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Evidence {
-    /// The sound's peak over the 10-40 ms before its onset, dB.
+    /// The sound's peak over the 5-40 ms before its onset, dB.
     pub rise_db: f32,
-    /// Some of those 10-40 ms lie in an impulse that fired.
+    /// Some of those 5-40 ms lie in an impulse that fired.
     pub over_fired_impulse: bool,
     /// The speech guard's span before the onset held enough unrecognised sound.
     pub follows_unrecognised_sound: bool,

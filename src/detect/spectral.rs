@@ -8,7 +8,7 @@
 //! signal a few samples later gives an onset as many samples later and the same
 //! strength, wherever the frames fall), whatever became of the onsets before it. The
 //! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
-//! here: it must stand 10 dB out of the 40-10 ms before it (a consonant inside speech
+//! here: it must stand 10 dB out of the 40-5 ms before it (a consonant inside speech
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
 //! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
 //! so on. The levels they compare are the sound in a frame, its
@@ -79,9 +79,14 @@ use crate::config::{DetectorSettings, PatternKind};
 use crate::pattern::Pattern;
 
 /// The frames between these times before an onset are the quiet it must rise out of
-/// (`GateParams::pre_quiet_db`).
+/// (`GateParams::pre_quiet_db`); the speech guard's span and a recognised sound's start
+/// end where this one does. The placement puts an onset on the first 1.5 ms block
+/// within 12 dB of its sound's loudest, so what lies a few blocks before it is the
+/// sound before, not its attack. The end was swept from 0 to 20 ms over every dev set
+/// (`docs/quiet-before.md`): 3.75 to 7.5 ms a plateau; 5 ms keeps the most of a voice's
+/// own speech out, 10 ms (as it was) let a consonant 5-10 ms after a vowel through.
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
-const PRE_QUIET_TO_SECONDS: f64 = 0.010;
+const PRE_QUIET_TO_SECONDS: f64 = 0.005;
 /// Shift tolerance when comparing frames with a template.
 pub(super) const MAX_SHIFT: usize = 1;
 /// The noise floor rises this fast, dB per second, and falls this fast towards a quieter
@@ -342,11 +347,11 @@ pub struct OnsetRecord {
     /// The nearest background sound's score (none when the model is not used).
     #[serde(serialize_with = "super::opt_ratio")]
     pub background_score: Option<f64>,
-    /// How far the sound's peak rose above the 10-40 ms before its onset, dB (the
+    /// How far the sound's peak rose above the 5-40 ms before its onset, dB (the
     /// quiet-before gate asks for 10).
     #[serde(serialize_with = "super::opt_db")]
     pub rise_db: Option<f64>,
-    /// Some of those 10-40 ms lie in an impulse that fired: the onset begins over a
+    /// Some of those 5-40 ms lie in an impulse that fired: the onset begins over a
     /// recognised word's tail, and an impulse pattern scoring `over_fired_score` there
     /// is not held to the rise.
     pub over_fired_impulse: bool,
@@ -1103,7 +1108,7 @@ impl SpectralMatcher {
     }
 
     /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
-    /// guard (from 10 ms before the onset, as the guard looks), and whether it is an
+    /// guard (from 5 ms before the onset, as the guard looks), and whether it is an
     /// impulse that fired; returns its slot.
     fn cover(&mut self, time_sample: u64, end: u64, fired: bool) -> usize {
         let slot = self.recognised_next;
@@ -1344,12 +1349,12 @@ impl SpectralMatcher {
         self.extending = Some(e);
     }
 
-    /// Whether the `speech_guard_seconds` before an onset (up to 10 ms before it) hold
+    /// Whether the `speech_guard_seconds` before an onset (up to 5 ms before it) hold
     /// `GUARD_SOUND_SECONDS` of frames within `GUARD_DB` of the new sound's `peak`
     /// (dB) that no recognised sound covers: the onset is then part of a longer
     /// unrecognised sound, such as a consonant inside speech. A frame is judged by the
     /// sample at its centre; a recognised sound (one that fired, or that only the guard
-    /// stopped) covers 10 ms before its onset to the end of its take's length (a held
+    /// stopped) covers 5 ms before its onset to the end of its take's length (a held
     /// one, to its end).
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
