@@ -9,8 +9,9 @@
 //! It knows nothing of patterns or of what became of an onset, so its placements do
 //! not depend on any decision. The same stage places a stream's onsets (inside the
 //! spectral matcher, on the detector thread) and an enrolled take's
-//! ([`super::enrol::take_onsets`], on the thread that builds the detector): a take's
-//! onset lies where a stream would place it. Allocates nothing after `new`.
+//! ([`super::enrol::take_onsets`], on the thread that builds the detector, without the
+//! condition on the room's noise): a take's onset lies where a stream in a quiet room
+//! would place it. Allocates nothing after `new`.
 
 /// An onset is placed on the samples this many frames after its detection, once the
 /// attack has arrived. Waiting longer lets the loudest so far come nearer the sound's
