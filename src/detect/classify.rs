@@ -11,7 +11,7 @@
 //! power spectrum, scaled to the onset's sound, plus the room's noise. In a quiet room
 //! that is the take as enrolled.
 
-use super::features::{features_of_power, scale_to_unit, Analyzer};
+use super::features::{features_of_power, scale_to_unit, Analyzer, BANDS};
 use super::onset::OnsetParams;
 use super::spectral::run_onset_stage;
 use super::{white_noise, NOISE_SEED};
@@ -29,15 +29,14 @@ const CALIBRATION_SECONDS: f64 = 2.0;
 /// measured once, on seeded white noise through the same analysis and onset stage as
 /// the stream.
 pub(super) fn noise_over_floor(params: OnsetParams, rate: f64) -> Vec<f32> {
-    let analyzer = Analyzer::new(rate);
-    let (bands, win) = (analyzer.band_bins().len(), analyzer.win);
+    let win = Analyzer::win_at(rate);
     let settle = (CALIBRATION_SECONDS * rate) as usize;
     let noise = white_noise(2 * settle + win, 0.5, NOISE_SEED);
-    let (mut mean, mut floor) = (vec![0.0f64; bands], vec![0.0f64; bands]);
+    let (mut mean, mut floor) = (vec![0.0f64; BANDS], vec![0.0f64; BANDS]);
     run_onset_stage(&noise, rate, params, 0, |step| {
         // Frames whose window starts once the floors have settled.
         if step.consumed as usize >= settle + win {
-            for b in 0..bands {
+            for b in 0..BANDS {
                 mean[b] += f64::from(step.power[b]);
                 floor[b] += f64::from(step.floors[b]);
             }
@@ -143,7 +142,7 @@ impl Room {
 
 #[cfg(test)]
 mod tests {
-    use super::super::features::{cepstrum_basis, pool_power, similarity, BANDS, FEATURES};
+    use super::super::features::{cepstrum_basis, pool_power, similarity, FEATURES};
     use super::super::onset::OnsetDetector;
     use super::*;
 

@@ -54,7 +54,7 @@ pub(super) struct Analyzer {
 
 impl Analyzer {
     pub(super) fn new(rate: f64) -> Self {
-        let win = ((WINDOW_SECONDS * rate).round() as usize).max(32);
+        let win = Self::win_at(rate);
         let hop = Self::hop_at(rate);
         let fft = RealFftPlanner::<f32>::new().plan_fft_forward(win);
         let window = (0..win)
@@ -111,6 +111,11 @@ impl Analyzer {
             cepstrum: cepstrum_basis(),
             power: vec![0.0; BANDS],
         }
+    }
+
+    /// Samples in a frame's window at `rate`.
+    pub(super) fn win_at(rate: f64) -> usize {
+        ((WINDOW_SECONDS * rate).round() as usize).max(32)
     }
 
     /// Samples between frames at `rate`.

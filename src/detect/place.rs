@@ -25,9 +25,9 @@ pub(super) const PLACE_AFTER_FRAMES: u64 = 3;
 pub(super) const ONSET_RANGE_DB: f64 = 12.0;
 
 /// ...and whose energy is at least this many times the room's noise in as long a window
-/// (when some window there is). A sound whose first milliseconds lie within 12 dB of the noise
-/// (a fricative at -11 dB in a -50 dB room) would otherwise be placed in the noise
-/// before it. A window of `hop / 2` samples of white noise holds some 32 independent
+/// (when some window there is). A sound whose first milliseconds lie within 12 dB of
+/// the noise (a fricative at -11 dB in a -50 dB room) would otherwise be placed in the
+/// noise before it. A window of `hop / 2` samples of white noise holds some 32 independent
 /// samples and never reaches 4 times its mean; noise as narrow as a hum, about two
 /// degrees of freedom per window, does once in 50 windows. Swept 2-8 over every dev
 /// set: the mean F1 stands level from 3 to 6, and 4 finds the most exact copies of
