@@ -1,21 +1,43 @@
 #!/bin/bash
-# Copies of sets in the dev sets' format (../shared/devsets/README.md) heard in a
-# reverberant room: every WAV, the enrolment takes with the sequences, through sox's
-# reverb (the performer enrols and performs in the same room), every truth file as it is.
-# A check that the detector holds up in a room with a tail, which no dev set has.
+# Copies of sets in the dev sets' format (../shared/devsets/README.md) heard in another
+# room: every WAV, the enrolment takes with the sequences (the performer enrols and
+# performs in the same room), every truth file as it is. A check that the detector
+# holds up in rooms that no dev set has.
 #
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR [REVERBERANCE [ROOM_SCALE]]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE]]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
-# REVERBERANCE and ROOM_SCALE are sox reverb's percentages (default 50 and 100).
+# reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
+# noise: sox's TYPE (whitenoise, pinknoise, brownnoise) at LEVEL_DB (its peaks that
+# far under full scale) added to each file. Both repeatable (sox -R).
 set -euo pipefail
-if [ $# -lt 2 ] || [ $# -gt 4 ]; then
-    sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//' >&2
+usage() {
+    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
-fi
-src=$1 out=$2 reverberance=${3:-50} room_scale=${4:-100}
+}
+[ $# -ge 3 ] || usage
+src=$1 out=$2 kind=$3
+shift 3
+case $kind in
+    reverb)
+        [ $# -le 2 ] || usage
+        reverberance=${1:-50} room_scale=${2:-100}
+        ;;
+    noise)
+        [ $# -eq 2 ] || usage
+        noise_type=$1 level_db=$2
+        case $noise_type in
+            whitenoise | pinknoise | brownnoise) ;;
+            *) echo "room-sets.sh: noise type $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
+        esac
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb or noise" >&2; exit 2 ;;
+esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
 count=0
 for set in "$src"/*/; do
     set=${set%/}
@@ -26,13 +48,25 @@ for set in "$src"/*/; do
     for csv in "$set"/seq_*.csv; do cp "$csv" "$out/$name/"; done
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
-        # 4 dB down first so that the tail added to the loudest hits does not clip;
-        # 50 % HF damping and no pre-delay are sox's defaults.
-        sox -R -V1 "$wav" "$out/$name/$rel" gain -4 reverb "$reverberance" 50 "$room_scale"
+        if [ "$kind" = reverb ]; then
+            # 4 dB down first so that the tail added to the loudest hits does not clip;
+            # 50 % HF damping and no pre-delay are sox's defaults.
+            sox -R -V1 "$wav" "$out/$name/$rel" gain -4 reverb "$reverberance" 50 "$room_scale"
+        else
+            seconds=$(soxi -D "$wav" 2> /dev/null)
+            rate=$(soxi -r "$wav" 2> /dev/null)
+            sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
+                synth "$seconds" "$noise_type" vol "$level_db" dB
+            sox -R -V1 -m "$wav" "$tmp/noise.wav" "$out/$name/$rel"
+        fi
     done
     count=$((count + 1))
 done
 [ "$count" -gt 0 ] || { echo "room-sets.sh: $src holds no set (no */set.json)" >&2; exit 1; }
+if [ "$kind" = noise ]; then
+    echo "room-sets.sh: $count sets in $out ($noise_type, peaks $level_db dB)"
+    exit 0
+fi
 # The room this makes: an impulse through the same chain, its reverberation time (T20 of
 # the Schroeder decay curve, from -5 to -25 dB, times 3) and the direct sound's energy
 # over the reverberation's.
