@@ -23,6 +23,10 @@ case $kind in
     reverb)
         [ $# -le 2 ] || usage
         reverberance=${1:-50} room_scale=${2:-100}
+        # 4 dB down first so that the tail added to the loudest hits does not clip;
+        # 50 % HF damping and no pre-delay are sox's defaults. The files and the
+        # impulse measured below go through this one chain.
+        chain=(gain -4 reverb "$reverberance" 50 "$room_scale")
         ;;
     noise)
         [ $# -eq 2 ] || usage
@@ -49,9 +53,7 @@ for set in "$src"/*/; do
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
         if [ "$kind" = reverb ]; then
-            # 4 dB down first so that the tail added to the loudest hits does not clip;
-            # 50 % HF damping and no pre-delay are sox's defaults.
-            sox -R -V1 "$wav" "$out/$name/$rel" gain -4 reverb "$reverberance" 50 "$room_scale"
+            sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)
@@ -70,13 +72,13 @@ fi
 # The room this makes: an impulse through the same chain, its reverberation time (T20 of
 # the Schroeder decay curve, from -5 to -25 dB, times 3) and the direct sound's energy
 # over the reverberation's.
-room=$(python3 - "$reverberance" "$room_scale" <<'PY'
+room=$(python3 - "${chain[@]}" <<'PY'
 import math, struct, subprocess, sys
 rate, seconds = 48000, 4
 impulse = [0.0] * (rate * seconds)
 impulse[0] = 0.5
 raw = ["-t", "raw", "-r", str(rate), "-b", "32", "-e", "floating-point", "-c", "1"]
-y = subprocess.run(["sox", "-V1", *raw, "-", *raw, "-", "gain", "-4", "reverb", *sys.argv[1:2], "50", *sys.argv[2:3]],
+y = subprocess.run(["sox", "-V1", *raw, "-", *raw, "-", *sys.argv[1:]],
                    input=struct.pack(f"<{len(impulse)}f", *impulse), capture_output=True, check=True).stdout
 y = struct.unpack(f"<{len(y) // 4}f", y)
 direct, tail = y[:2], y[2:]
