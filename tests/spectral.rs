@@ -707,6 +707,45 @@ fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
     }
 }
 
+/// Brown noise (white noise through a leaky integrator) of RMS `rms`, added to `rec`:
+/// rumble whose power lies mostly far under the 80 Hz the bands start at, and wanders.
+fn add_rumble(rec: &mut [f32], rms: f64, seed: u64) {
+    let mut rng = Rng::new(seed);
+    let mut y = 0.0f64;
+    let rumble: Vec<f64> = (0..rec.len())
+        .map(|_| {
+            y = 0.999 * y + rng.normal();
+            y
+        })
+        .collect();
+    let scale = rms / (rumble.iter().map(|v| v * v).sum::<f64>() / rumble.len() as f64).sqrt();
+    for (x, r) in rec.iter_mut().zip(&rumble) {
+        *x += (r * scale) as f32;
+    }
+}
+
+#[test]
+fn hits_over_rumble_under_the_bands_are_each_found() {
+    let settings = spectral();
+    // As loud, in RMS, as the sequence itself: a room by a road, or an air conditioner.
+    let (mut rec, truth, _) = sequence((0.12, 0.7), 11);
+    let rms = (rec.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>() / rec.len() as f64).sqrt();
+    add_rumble(&mut rec, rms, 12);
+    let mut det = Detector::new(enrol(&settings), &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let mut outcomes = std::collections::BTreeMap::new();
+    for r in det.take_explain().unwrap() {
+        *outcomes.entry(r.outcome.as_str()).or_insert(0) += 1;
+    }
+    let s = score(&events, &truth, 0.05);
+    assert!(
+        s.overall.f1 >= 0.95,
+        "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}
+
 /// A live stream starts at another sample each time: a recording a few samples later
 /// gives its events as many samples later, with the same labels and strengths.
 #[test]

@@ -13,6 +13,7 @@
 
 use std::sync::Arc;
 
+use biquad::{Biquad, Coefficients, DirectForm2Transposed, ToHertz, Type};
 use realfft::num_complex::Complex32;
 use realfft::{RealFftPlanner, RealToComplex};
 
@@ -28,6 +29,53 @@ const LOW_HZ: f64 = 80.0;
 pub(super) fn top_hz(rate: f64) -> f64 {
     crate::audio::resampler_passband() * rate / 2.0
 }
+/// Cutoff of [`LowCut`]: far enough under the bands' low edge (`LOW_HZ`) that what the
+/// bands hear passes within 0.4 dB (24 dB an octave: (80/60)^8 = 10, -0.41 dB), so a
+/// kick's fundamental counts in the level as it does in the bands.
+const LOW_CUT_HZ: f64 = 60.0;
+/// The samples as the bands hear them, for the level of the sound in a frame: a
+/// 4th-order Butterworth high-pass under the bands (`LOW_CUT_HZ`). Rumble under the
+/// bands (traffic, air conditioning, a microphone handled, a DC offset) is nothing the
+/// bands or the features see, so it is no sound for the gates either; in the samples'
+/// plain power it would be most of a quiet room's level, and wander with it. Runs
+/// wherever the samples arrive; one sample at a time, allocating nothing.
+#[derive(Clone)]
+pub(super) struct LowCut {
+    stages: [DirectForm2Transposed<f32>; 2],
+}
+
+impl LowCut {
+    pub(super) fn new(rate: f64) -> Self {
+        // The two sections of a 4th-order Butterworth filter: Q = 1 / (2 cos(k pi / 8)),
+        // k = 1 and 3.
+        let section = |q: f64| {
+            let coefficients = Coefficients::<f32>::from_params(
+                Type::HighPass,
+                (rate as f32).hz(),
+                (LOW_CUT_HZ as f32).hz(),
+                q as f32,
+            )
+            // A rate under twice the cutoff (no rate the program accepts) passes all.
+            .unwrap_or(Coefficients {
+                a1: 0.0,
+                a2: 0.0,
+                b0: 1.0,
+                b1: 0.0,
+                b2: 0.0,
+            });
+            DirectForm2Transposed::<f32>::new(coefficients)
+        };
+        let q = |k: f64| 1.0 / (2.0 * (k * std::f64::consts::PI / 8.0).cos());
+        Self {
+            stages: [section(q(1.0)), section(q(3.0))],
+        }
+    }
+
+    pub(super) fn run(&mut self, x: f32) -> f32 {
+        self.stages.iter_mut().fold(x, |y, s| s.run(y))
+    }
+}
+
 /// Bands are floored this far below the frame's loudest band.
 const BAND_RANGE_DB: f32 = 60.0;
 
@@ -269,6 +317,39 @@ pub(super) fn normalise(v: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_low_cut_removes_rumble_under_the_bands_and_passes_what_they_hear() {
+        let rate = 22_050.0;
+        // Gain in dB of a steady sine of `hz`, after a second to settle.
+        let gain_db = |hz: f64| {
+            let mut low_cut = LowCut::new(rate);
+            let (mut input, mut output) = (0.0f64, 0.0f64);
+            for n in 0..(2.0 * rate) as usize {
+                let x = (2.0 * std::f64::consts::PI * hz * n as f64 / rate).sin() as f32;
+                let y = low_cut.run(x);
+                if n as f64 >= rate {
+                    input += f64::from(x).powi(2);
+                    output += f64::from(y).powi(2);
+                }
+            }
+            10.0 * (output / input).log10()
+        };
+        // A 4th-order Butterworth high-pass: -3 dB at its cutoff, 24 dB per octave under
+        // it, the bands' lowest frequency passed within 0.4 dB.
+        assert!(
+            (gain_db(LOW_CUT_HZ) + 3.0).abs() < 0.3,
+            "{}",
+            gain_db(LOW_CUT_HZ)
+        );
+        assert!(gain_db(LOW_HZ) > -0.45, "{}", gain_db(LOW_HZ));
+        assert!(gain_db(15.0) < -45.0, "{}", gain_db(15.0));
+        assert!(gain_db(1000.0).abs() < 0.1, "{}", gain_db(1000.0));
+        // A DC offset goes.
+        let mut low_cut = LowCut::new(rate);
+        let last = (0..rate as usize).fold(0.0, |_, _| low_cut.run(0.5));
+        assert!(last.abs() < 1e-4, "{last}");
+    }
 
     /// The features of `k` frames.
     fn pool_features<'a>(

@@ -11,9 +11,10 @@
 //! here: it must stand 10 dB out of the 40-5 ms before it (a consonant inside speech
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
 //! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
-//! so on. The levels they compare are the sound in a frame, its
-//! power less twice the room's noise (`sound_level_db`), so that noise just under a
-//! sound neither hides it nor passes for speech around it.
+//! so on. The levels they compare are the sound in a frame as the bands hear it (the
+//! rumble under them cut, [`LowCut`]), its power less twice the room's noise
+//! (`sound_level_db`), so that noise just under a sound neither hides it nor passes
+//! for speech around it.
 //! An enrolled take's onset is placed by the same stages, run on the take after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
 //! first consonant (the "p" of "pew") is found; an impulse whose two placements differ
@@ -66,8 +67,8 @@ use super::enrol::{
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    features_of_power, normalise, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
-    HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, scale_to_unit, similarity, Analyzer, LowCut, BANDS,
+    FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage, SOUND_DROP_DB};
@@ -242,6 +243,9 @@ pub struct SpectralMatcher {
     patterns: Vec<PatternInfo>,
     /// Ring of the last samples (a power of two long).
     samples: Vec<f32>,
+    low_cut: LowCut,
+    /// The same samples through `low_cut`, in a ring as long.
+    heard_samples: Vec<f32>,
     /// Samples consumed.
     consumed: u64,
     /// Samples since the last frame.
@@ -253,8 +257,11 @@ pub struct SpectralMatcher {
     /// Frames computed.
     frame_count: u64,
     onsets: OnsetDetector,
-    /// The broadband level of the room: follows quieter frames at once, rises slowly.
+    /// The broadband level of the room (for the placement, which measures the samples):
+    /// follows quieter frames at once, rises slowly.
     noise_floor_db: f32,
+    /// The same of the room as the bands hear it (for `levels`).
+    heard_floor_db: f32,
     placer: Placer,
     pending: Vec<PendingOnset>,
     /// Placed onsets that found `pending` full.
@@ -566,6 +573,8 @@ impl SpectralMatcher {
             templates,
             patterns: infos,
             samples: vec![0.0; sample_capacity],
+            low_cut: LowCut::new(rate),
+            heard_samples: vec![0.0; sample_capacity],
             consumed: 0,
             since_frame: 0,
             frames: vec![0.0; frame_capacity * BANDS],
@@ -580,6 +589,7 @@ impl SpectralMatcher {
                 rate,
             ),
             noise_floor_db: 0.0,
+            heard_floor_db: 0.0,
             placer: Placer::new(analyzer.hop),
             pending: Vec::with_capacity(16),
             pending_dropped: 0,
@@ -706,6 +716,7 @@ impl SpectralMatcher {
         for &x in samples {
             let slot = ring_slot(&self.samples, self.consumed);
             self.samples[slot] = x;
+            self.heard_samples[slot] = self.low_cut.run(x);
             self.consumed += 1;
             self.since_frame += 1;
             if self.since_frame == self.hop() && self.consumed >= self.analyzer.win as u64 {
@@ -773,12 +784,20 @@ impl SpectralMatcher {
         // Noise floor: follows quieter frames, at a bounded rate (as the onset stage's).
         let rise = FLOOR_RISE_DB_PER_S * HOP_SECONDS as f32;
         let fall = FLOOR_FALL_DB_PER_S * HOP_SECONDS as f32;
-        self.noise_floor_db = if f == 0 {
-            level
-        } else {
-            (self.noise_floor_db + rise).min(level.max(self.noise_floor_db - fall))
+        let follow = |floor: f32, level: f32| {
+            if f == 0 {
+                level
+            } else {
+                (floor + rise).min(level.max(floor - fall))
+            }
         };
-        self.levels[slot] = sound_level_db(level, self.noise_floor_db);
+        self.noise_floor_db = follow(self.noise_floor_db, level);
+        let heard: f64 = (start..self.consumed)
+            .map(|n| f64::from(self.heard_samples[ring_slot(&self.samples, n)]).powi(2))
+            .sum();
+        let heard_db = 10.0 * (heard / win as f64 + 1e-12).log10() as f32;
+        self.heard_floor_db = follow(self.heard_floor_db, heard_db);
+        self.levels[slot] = sound_level_db(heard_db, self.heard_floor_db);
 
         self.extend_recognised(f);
         if let Some(onset) = self.onsets.push(&self.analyzer.power) {
