@@ -6,14 +6,18 @@
 #
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE]]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
 # noise: sox's TYPE (whitenoise, pinknoise, brownnoise) at LEVEL_DB (its peaks that
-# far under full scale) added to each file. Both repeatable (sox -R).
+# far under full scale) added to each file.
+# hum: mains buzz (a ground loop, a lamp's dimmer) of FREQUENCY Hz and its harmonics up
+# to the 8th, the k-th at 1/k of the fundamental (a sawtooth's spectrum), its peaks
+# LEVEL_DB under full scale, added to each file. All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -36,7 +40,15 @@ case $kind in
             *) echo "room-sets.sh: noise type $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
         esac
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb or noise" >&2; exit 2 ;;
+    hum)
+        [ $# -eq 2 ] || usage
+        hum_hz=$1 level_db=$2
+        case $hum_hz in
+            50 | 60) ;;
+            *) echo "room-sets.sh: hum frequency $hum_hz: expected 50 or 60 (Hz)" >&2; exit 2 ;;
+        esac
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise or hum" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -57,8 +69,22 @@ for set in "$src"/*/; do
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)
-            sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
-                synth "$seconds" "$noise_type" vol "$level_db" dB
+            if [ "$kind" = noise ]; then
+                sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
+                    synth "$seconds" "$noise_type" vol "$level_db" dB
+            else
+                sines=() weights=()
+                # Each harmonic a third of 1/k, so that their sum cannot clip before
+                # `gain -n` sets the buzz's peaks.
+                for k in 1 2 3 4 5 6 7 8; do
+                    sines+=(sine $((hum_hz * k)))
+                    weights+=("${k}v$(awk -v k="$k" 'BEGIN { printf "%.4f", 1 / (3 * k) }')")
+                done
+                mix=$(IFS=,; echo "${weights[*]}")
+                sox -R -V1 -n -r "$rate" -c 8 -b 32 -e floating-point "$tmp/buzz.wav" \
+                    synth "$seconds" "${sines[@]}"
+                sox -R -V1 "$tmp/buzz.wav" "$tmp/noise.wav" remix "$mix" gain -n "$level_db"
+            fi
             sox -R -V1 -m "$wav" "$tmp/noise.wav" "$out/$name/$rel"
         fi
     done
@@ -67,6 +93,10 @@ done
 [ "$count" -gt 0 ] || { echo "room-sets.sh: $src holds no set (no */set.json)" >&2; exit 1; }
 if [ "$kind" = noise ]; then
     echo "room-sets.sh: $count sets in $out ($noise_type, peaks $level_db dB)"
+    exit 0
+fi
+if [ "$kind" = hum ]; then
+    echo "room-sets.sh: $count sets in $out ($hum_hz Hz hum and 7 harmonics, peaks $level_db dB)"
     exit 0
 fi
 # The room this makes: an impulse through the same chain, its reverberation time (T20 of
