@@ -677,6 +677,23 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
 /// Issue: onsets vanished in noise and in quick succession (30-120 ms gaps at -40 dB
 /// noise: onset F1 0.29). Here the hits, 18-24 dB under full scale (as quiet as real
 /// takes often are) with 30-120 ms between them, sit in noise 40 dB under full scale.
+/// The events of `patterns` on `rec`, and how many onsets each gate decided (for a
+/// failing test's message).
+fn detect_explained(
+    patterns: Vec<Pattern>,
+    settings: &DetectorSettings,
+    rec: &[f32],
+) -> (Vec<Event>, std::collections::BTreeMap<&'static str, usize>) {
+    let mut det = Detector::new(patterns, settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, rec, 256);
+    let mut outcomes = std::collections::BTreeMap::new();
+    for r in det.take_explain().unwrap() {
+        *outcomes.entry(r.outcome.as_str()).or_insert(0) += 1;
+    }
+    (events, outcomes)
+}
+
 #[test]
 fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
     let settings = spectral();
@@ -691,13 +708,7 @@ fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
         .collect();
     for seed in [7, 8] {
         let (rec, truth, _) = sequence_in_noise((0.03, 0.12), (-24.0, -18.0), 0.01, seed);
-        let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
-        det.enable_explain();
-        let events = detect_in_blocks(&mut det, &rec, 256);
-        let mut outcomes = std::collections::BTreeMap::new();
-        for r in det.take_explain().unwrap() {
-            *outcomes.entry(r.outcome.as_str()).or_insert(0) += 1;
-        }
+        let (events, outcomes) = detect_explained(patterns.clone(), &settings, &rec);
         let s = score(&events, &truth, 0.05);
         assert!(
             s.overall.f1 >= 0.95,
@@ -731,13 +742,7 @@ fn hits_over_rumble_under_the_bands_are_each_found() {
     let (mut rec, truth, _) = sequence((0.12, 0.7), 11);
     let rms = (rec.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>() / rec.len() as f64).sqrt();
     add_rumble(&mut rec, rms, 12);
-    let mut det = Detector::new(enrol(&settings), &settings, RATE).unwrap();
-    det.enable_explain();
-    let events = detect_in_blocks(&mut det, &rec, 256);
-    let mut outcomes = std::collections::BTreeMap::new();
-    for r in det.take_explain().unwrap() {
-        *outcomes.entry(r.outcome.as_str()).or_insert(0) += 1;
-    }
+    let (events, outcomes) = detect_explained(enrol(&settings), &settings, &rec);
     let s = score(&events, &truth, 0.05);
     assert!(
         s.overall.f1 >= 0.95,
