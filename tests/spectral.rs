@@ -674,9 +674,6 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
     }
 }
 
-/// Issue: onsets vanished in noise and in quick succession (30-120 ms gaps at -40 dB
-/// noise: onset F1 0.29). Here the hits, 18-24 dB under full scale (as quiet as real
-/// takes often are) with 30-120 ms between them, sit in noise 40 dB under full scale.
 /// The events of `patterns` on `rec`, and how many onsets each gate decided (for a
 /// failing test's message).
 fn detect_explained(
@@ -694,6 +691,9 @@ fn detect_explained(
     (events, outcomes)
 }
 
+/// Issue: onsets vanished in noise and in quick succession (30-120 ms gaps at -40 dB
+/// noise: onset F1 0.29). Here the hits, 18-24 dB under full scale (as quiet as real
+/// takes often are) with 30-120 ms between them, sit in noise 40 dB under full scale.
 #[test]
 fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
     let settings = spectral();

@@ -793,7 +793,7 @@ impl SpectralMatcher {
         };
         self.noise_floor_db = follow(self.noise_floor_db, level);
         let heard: f64 = (start..self.consumed)
-            .map(|n| f64::from(self.heard_samples[ring_slot(&self.samples, n)]).powi(2))
+            .map(|n| f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2))
             .sum();
         let heard_db = 10.0 * (heard / win as f64 + 1e-12).log10() as f32;
         self.heard_floor_db = follow(self.heard_floor_db, heard_db);
