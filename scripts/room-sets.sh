@@ -47,6 +47,14 @@ case $kind in
             50 | 60) ;;
             *) echo "room-sets.sh: hum frequency $hum_hz: expected 50 or 60 (Hz)" >&2; exit 2 ;;
         esac
+        sines=() weights=()
+        # Each harmonic a third of 1/k, so that their sum cannot clip before `gain -n`
+        # sets the buzz's peaks.
+        for k in 1 2 3 4 5 6 7 8; do
+            sines+=(sine $((hum_hz * k)))
+            weights+=("${k}v$(awk -v k="$k" 'BEGIN { printf "%.4f", 1 / (3 * k) }')")
+        done
+        mix=$(IFS=,; echo "${weights[*]}")
         ;;
     *) echo "room-sets.sh: room kind $kind: expected reverb, noise or hum" >&2; exit 2 ;;
 esac
@@ -73,14 +81,6 @@ for set in "$src"/*/; do
                 sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
                     synth "$seconds" "$noise_type" vol "$level_db" dB
             else
-                sines=() weights=()
-                # Each harmonic a third of 1/k, so that their sum cannot clip before
-                # `gain -n` sets the buzz's peaks.
-                for k in 1 2 3 4 5 6 7 8; do
-                    sines+=(sine $((hum_hz * k)))
-                    weights+=("${k}v$(awk -v k="$k" 'BEGIN { printf "%.4f", 1 / (3 * k) }')")
-                done
-                mix=$(IFS=,; echo "${weights[*]}")
                 sox -R -V1 -n -r "$rate" -c 8 -b 32 -e floating-point "$tmp/buzz.wav" \
                     synth "$seconds" "${sines[@]}"
                 sox -R -V1 "$tmp/buzz.wav" "$tmp/noise.wav" remix "$mix" gain -n "$level_db"
