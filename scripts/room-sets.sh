@@ -39,6 +39,7 @@ case $kind in
             whitenoise | pinknoise | brownnoise) ;;
             *) echo "room-sets.sh: noise type $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
         esac
+        added="$noise_type, peaks $level_db dB"
         ;;
     hum)
         [ $# -eq 2 ] || usage
@@ -55,6 +56,7 @@ case $kind in
             weights+=("${k}v$(awk -v k="$k" 'BEGIN { printf "%.4f", 1 / (3 * k) }')")
         done
         mix=$(IFS=,; echo "${weights[*]}")
+        added="$hum_hz Hz hum and 7 harmonics, peaks $level_db dB"
         ;;
     *) echo "room-sets.sh: room kind $kind: expected reverb, noise or hum" >&2; exit 2 ;;
 esac
@@ -91,12 +93,8 @@ for set in "$src"/*/; do
     count=$((count + 1))
 done
 [ "$count" -gt 0 ] || { echo "room-sets.sh: $src holds no set (no */set.json)" >&2; exit 1; }
-if [ "$kind" = noise ]; then
-    echo "room-sets.sh: $count sets in $out ($noise_type, peaks $level_db dB)"
-    exit 0
-fi
-if [ "$kind" = hum ]; then
-    echo "room-sets.sh: $count sets in $out ($hum_hz Hz hum and 7 harmonics, peaks $level_db dB)"
+if [ "$kind" != reverb ]; then
+    echo "room-sets.sh: $count sets in $out ($added)"
     exit 0
 fi
 # The room this makes: an impulse through the same chain, its reverberation time (T20 of
