@@ -10,6 +10,7 @@
 
 pub mod background;
 mod classify;
+mod context;
 mod enrol;
 mod envelope;
 mod features;

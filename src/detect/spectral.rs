@@ -44,9 +44,8 @@
 //!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 200 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
-//! inside a sentence follows its words; a missed hit is shorter). A recognised impulse
-//! covers its take's length, longer while its sound goes on; a held sound, until its
-//! end.
+//! inside a sentence follows its words; a missed hit is shorter): the context stage
+//! ([`super::context`]) keeps the recognised sounds' spans and judges it.
 //!
 //! Continuous patterns: after an onset classified as one, the held stage
 //! ([`super::held`]) follows the sound frame by frame (while it still resembles the
@@ -62,6 +61,7 @@ use serde::Serialize;
 
 use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room};
+use super::context::{Context, GuardParams, SPAN_STRETCH};
 use super::enrol::{
     first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
@@ -71,7 +71,7 @@ use super::features::{
     FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
-use super::held::{Held, HeldParams, HeldStage, SOUND_DROP_DB};
+use super::held::{Held, HeldParams, HeldStage};
 use super::onset::{Onset, OnsetDetector, OnsetParams};
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
@@ -277,15 +277,10 @@ pub struct SpectralMatcher {
     heard_take: Vec<f32>,
     pitch: PitchEstimator,
     finished: bool,
-    /// The last recognised sounds, a ring; a held sound's span is open (`u64::MAX`)
-    /// until it ends.
-    recognised: [RecognisedSpan; RECOGNISED_SPANS],
-    recognised_next: usize,
+    /// The recognised sounds before an onset, and the speech guard.
+    context: Context,
     /// The first look at the onset whose decision waits for more windows.
     waiting: Option<FirstLook>,
-    /// The newest recognised impulse, whose span grows while its sound goes on.
-    extending: Option<ExtendingSpan>,
-    speech_guard_seconds: f64,
     gates: GateParams,
     /// The last onset that fired (sample), and how near an onset may be placed to it:
     /// the onset stage's `min_gap_seconds`.
@@ -405,63 +400,12 @@ const CONTINUATION_SLACK_SECONDS: f64 = 0.02;
 const CONTINUATION_SIMILARITY: f32 = 0.8;
 const CONTINUATION_DB: f64 = 6.0;
 
-const RECOGNISED_SPANS: usize = 8;
-
-/// A recognised sound's span, first and last sample.
-#[derive(Clone, Copy)]
-struct RecognisedSpan {
-    from: u64,
-    to: u64,
-    /// An impulse that fired (rather than a held sound, or a pattern's sound that
-    /// only the guard stopped).
-    fired: bool,
-}
-
-impl RecognisedSpan {
-    const NONE: Self = Self {
-        from: u64::MAX,
-        to: u64::MAX,
-        fired: false,
-    };
-
-    /// Whether the span holds sample `n`.
-    fn holds(&self, n: u64) -> bool {
-        self.from != u64::MAX && n >= self.from && n <= self.to
-    }
-}
-
 /// Two patterns whose takes are this alike over a decision window cannot be told
 /// apart there; a choice between them waits for the windows that part them
 /// ([`separating_windows`]). Swept over every dev set (`docs/classify.md`): 0.6 and 0.7
 /// score alike, 0.8 and 0.9 lose the beats' "B" and "Pf", 0.5 and less wait for pairs
 /// that longer windows do not part.
 const ALIKE_SIMILARITY: f32 = 0.7;
-
-/// A recognised impulse covers its take's length from its onset, and longer while its
-/// sound stays within `SOUND_DROP_DB` of its peak (said more slowly than enrolled), up to
-/// this many times the take's length. Swept over every dev set (`docs/speech-guard.md`):
-/// 4 to 10 score alike; 2 loses words of the rhythms at 150 bpm.
-const SPAN_STRETCH: u64 = 4;
-
-#[derive(Clone, Copy)]
-struct ExtendingSpan {
-    slot: usize,
-    peak_db: f32,
-    /// Last sample the span may reach.
-    limit: u64,
-}
-/// Speech fills most of the guard's span with sound; a hit that no pattern recognised
-/// (a miss, a cough) holds its level for well under 200 ms, so it does not stop the
-/// hits after it. Chosen with the guard's span by a sweep over the development sets
-/// (`docs/speech-guard.md`): with 60 ms, a guard long enough to keep a voice's own
-/// speech out stopped the hits after every miss. The speech guard's unrecognised
-/// sound: this long in all...
-const GUARD_SOUND_SECONDS: f64 = 0.2;
-/// ...within this many dB of the new sound's peak. On the 48 s of synthetic speech of
-/// `scripts/eval-speech.sh` with a guard of 0.5 s (threshold 0.3): 104 false events
-/// without the guard, 2 with it; on the real beatbox sets (`examples/eval_beatbox.rs`)
-/// it costs the isolated set 0.008 of F1 and leaves the others as they are.
-const GUARD_DB: f32 = 10.0;
 
 impl SpectralMatcher {
     pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings) -> Self {
@@ -547,7 +491,7 @@ impl SpectralMatcher {
         let frame_capacity =
             ((HISTORY_SECONDS / HOP_SECONDS) as usize).max(decision_frames + 4 * MAX_SHIFT + 16);
         let sample_capacity = ((HISTORY_SECONDS * rate) as usize).next_power_of_two();
-        let win = analyzer.win;
+        let (win, hop_seconds) = (analyzer.win, analyzer.hop as f64 / rate);
         let n_patterns = infos.len();
         let kinds: Vec<PatternKind> = infos.iter().map(|i| i.kind).collect();
         let separating = separating_windows(
@@ -603,11 +547,11 @@ impl SpectralMatcher {
             pitch: PitchEstimator::new(rate),
             analyzer,
             finished: false,
-            recognised: [RecognisedSpan::NONE; RECOGNISED_SPANS],
-            recognised_next: 0,
+            context: Context::new(
+                GuardParams::with_span(settings.speech_guard_seconds),
+                hop_seconds,
+            ),
             waiting: None,
-            extending: None,
-            speech_guard_seconds: settings.speech_guard_seconds,
             gates: GateParams {
                 min_strength: settings.min_strength,
                 ..GateParams::default()
@@ -799,7 +743,11 @@ impl SpectralMatcher {
         self.heard_floor_db = follow(self.heard_floor_db, heard_db);
         self.levels[slot] = sound_level_db(heard_db, self.heard_floor_db);
 
-        self.extend_recognised(f);
+        self.context.follow(
+            self.analyzer.frame_centre(f),
+            self.analyzer.frame_centre(f) + self.hop() as u64 / 2,
+            self.levels[slot],
+        );
         if let Some(onset) = self.onsets.push(&self.analyzer.power) {
             self.placer.detected(onset.frame);
         }
@@ -967,14 +915,15 @@ impl SpectralMatcher {
         // have let through, is a pattern's sound too: it covers its span as a fired one
         // does, so the guard never feeds on its own decisions (only sounds that are
         // none of the patterns keep it closed).
+        // A recognised sound is covered from where the guard's look ends before it.
+        let covered_from = self.quiet_before_span(time_sample).1;
         if outcome == Outcome::SpeechGuard
             && !evidence.below_threshold()
             && !evidence.like_speech(&self.gates)
         {
-            self.cover(
-                time_sample,
+            self.context.stopped(
+                covered_from,
                 time_sample + self.templates[best_template].length_after_onset,
-                false,
             );
         }
         if outcome != Outcome::Fired {
@@ -996,18 +945,16 @@ impl SpectralMatcher {
             emitted_at: self.consumed as f64 / self.rate,
             pitch: None,
         };
-        let span_end = if info.kind == PatternKind::Continuous {
-            u64::MAX
+        if info.kind == PatternKind::Continuous {
+            self.context.held_began(covered_from);
         } else {
-            time_sample + take_length
-        };
-        let slot = self.cover(time_sample, span_end, info.kind == PatternKind::Impulse);
-        let info = &self.patterns[pi];
-        self.extending = (info.kind == PatternKind::Impulse).then_some(ExtendingSpan {
-            slot,
-            peak_db: peak,
-            limit: time_sample + SPAN_STRETCH * take_length,
-        });
+            self.context.fired_impulse(
+                covered_from,
+                time_sample + take_length,
+                peak,
+                time_sample + SPAN_STRETCH * take_length,
+            );
+        }
         self.last_impulse = (info.kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
             onset_frame,
@@ -1126,20 +1073,6 @@ impl SpectralMatcher {
         best
     }
 
-    /// Records a recognised sound from its onset at `time_sample` to `end` for the speech
-    /// guard (from 5 ms before the onset, as the guard looks), and whether it is an
-    /// impulse that fired; returns its slot.
-    fn cover(&mut self, time_sample: u64, end: u64, fired: bool) -> usize {
-        let slot = self.recognised_next;
-        self.recognised[slot] = RecognisedSpan {
-            from: self.quiet_before_span(time_sample).1,
-            to: end,
-            fired,
-        };
-        self.recognised_next = (slot + 1) % RECOGNISED_SPANS;
-        slot
-    }
-
     /// The loudest level (dB of sound) of the frames from `onset_frame`, and of the
     /// frames before the onset at `time_sample` in the quiet-before span. A vocal hit
     /// stands out of relative quiet; a consonant inside speech follows a vowel, so an
@@ -1165,12 +1098,8 @@ impl SpectralMatcher {
     /// and the syllables after it would then be excused.
     fn over_fired_impulse(&self, time_sample: u64) -> bool {
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
-        self.frames_inside(quiet_from, quiet_to).any(|f| {
-            let centre = self.analyzer.frame_centre(f);
-            self.recognised
-                .iter()
-                .any(|span| span.fired && span.holds(centre))
-        })
+        self.frames_inside(quiet_from, quiet_to)
+            .any(|f| self.context.fired_at(self.analyzer.frame_centre(f)))
     }
 
     /// The samples `[from, to)` before the onset at `time_sample` that its sound must
@@ -1351,44 +1280,23 @@ impl SpectralMatcher {
         (first..end.max(first)).filter(move |&f| f < self.frame_count && f + cap > self.frame_count)
     }
 
-    /// Stretches the newest recognised impulse's span over frame `f` while its sound
-    /// goes on.
-    fn extend_recognised(&mut self, f: u64) {
-        let Some(mut e) = self.extending else { return };
-        let level = self.levels[(f % self.frame_capacity as u64) as usize];
-        let centre = self.analyzer.frame_centre(f);
-        if level < e.peak_db - SOUND_DROP_DB || centre > e.limit {
-            self.extending = None;
-            return;
-        }
-        e.peak_db = e.peak_db.max(level);
-        let end = centre + self.hop() as u64 / 2;
-        let span = &mut self.recognised[e.slot];
-        span.to = span.to.max(end);
-        self.extending = Some(e);
-    }
-
     /// Whether the `speech_guard_seconds` before an onset (up to 5 ms before it) hold
-    /// `GUARD_SOUND_SECONDS` of frames within `GUARD_DB` of the new sound's `peak`
-    /// (dB) that no recognised sound covers: the onset is then part of a longer
-    /// unrecognised sound, such as a consonant inside speech. A frame is judged by the
-    /// sample at its centre; a recognised sound (one that fired, or that only the guard
-    /// stopped) covers 5 ms before its onset to the end of its take's length (a held
-    /// one, to its end).
+    /// enough unrecognised sound near the new sound's `peak` (dB) for the speech guard
+    /// ([`Context::follows_unrecognised_sound`]): the onset is then part of a longer
+    /// unrecognised sound, such as a consonant inside speech. The frames are those whose
+    /// whole window lies in that span.
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
-        let hop = self.hop() as u64;
-        let from = time_sample.saturating_sub((self.speech_guard_seconds * self.rate) as u64);
+        let span = (self.context.params().span_seconds * self.rate) as u64;
+        let from = time_sample.saturating_sub(span);
         let to = self.quiet_before_span(time_sample).1;
-        let needed = (GUARD_SOUND_SECONDS * self.rate / hop as f64).ceil() as usize;
-        self.frames_inside(from, to)
-            .filter(|&f| {
-                let centre = self.analyzer.frame_centre(f);
-                self.levels[(f % cap) as usize] >= peak - GUARD_DB
-                    && !self.recognised.iter().any(|span| span.holds(centre))
-            })
-            .count()
-            >= needed
+        let frames = self.frames_inside(from, to).map(|f| {
+            (
+                self.analyzer.frame_centre(f),
+                self.levels[(f % cap) as usize],
+            )
+        });
+        self.context.follows_unrecognised_sound(frames, peak)
     }
 
     /// Feeds frame `f` to the held stage; turns the held sound it ends into an event.
@@ -1416,11 +1324,7 @@ impl SpectralMatcher {
             + self.analyzer.win as i64 / 2
             + self.hop() as i64 / 2)
             .max(h.begin_sample as i64 + 1) as u64;
-        for span in &mut self.recognised {
-            if span.to == u64::MAX {
-                span.to = end_sample;
-            }
-        }
+        self.context.end_held(end_sample);
         let lo = h
             .begin_sample
             .max(self.consumed.saturating_sub(self.samples.len() as u64));
