@@ -5,7 +5,8 @@
 //! tail of the word before; the quiet-before gate excuses it, [`super::gates`]).
 //!
 //! A recognised impulse covers its take's length from its onset, longer while its sound
-//! goes on ([`Context::follow`]); a held sound covers up to its end; a pattern's sound
+//! goes on and then while it dies away, until a new sound rises out of it
+//! ([`Context::follow`]); a held sound covers up to its end; a pattern's sound
 //! that only the guard stopped covers its take's length too, so the guard never feeds on
 //! its own decisions: only sounds that are none of the patterns keep it closed. It
 //! judges only the frames of the guard's span before an onset, so it opens within that
@@ -17,16 +18,21 @@
 
 use super::held::SOUND_DROP_DB;
 
-/// The speech guard's settings.
+/// The context stage's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct GuardParams {
-    /// How far back before an onset the guard looks, seconds (`speech_guard_seconds`;
-    /// 0 turns it off).
-    pub span_seconds: f64,
-    /// The unrecognised sound that closes it: this long in all...
-    pub sound_seconds: f64,
+pub(super) struct ContextParams {
+    /// How far back before an onset the speech guard looks, seconds
+    /// (`speech_guard_seconds`; 0 turns it off).
+    pub guard_seconds: f64,
+    /// The unrecognised sound that closes the guard: this long in all...
+    pub guard_sound_seconds: f64,
     /// ...within this many dB of the new sound's peak.
-    pub within_db: f32,
+    pub guard_db: f32,
+    /// A recognised impulse's sound that has died away (`SOUND_DROP_DB` under its peak)
+    /// still covers what follows until the level rises this far (dB) over the lowest
+    /// it fell to since: the rise the quiet-before gate asks of a new sound
+    /// (`GateParams::pre_quiet_db`).
+    pub new_sound_db: f32,
 }
 
 /// Speech fills most of the guard's span with sound; a hit that no pattern recognised
@@ -42,21 +48,23 @@ const GUARD_SOUND_SECONDS: f64 = 0.2;
 /// it costs the isolated set 0.008 of F1 and leaves the others as they are.
 const GUARD_DB: f32 = 10.0;
 
-impl GuardParams {
-    /// The guard looking `span_seconds` back, with the sound it asks for as swept.
-    pub fn with_span(span_seconds: f64) -> Self {
+impl ContextParams {
+    /// The guard looking `guard_seconds` back, with the sound it asks for as swept, and
+    /// a new sound rising `new_sound_db`.
+    pub fn new(guard_seconds: f64, new_sound_db: f32) -> Self {
         Self {
-            span_seconds,
-            sound_seconds: GUARD_SOUND_SECONDS,
-            within_db: GUARD_DB,
+            guard_seconds,
+            guard_sound_seconds: GUARD_SOUND_SECONDS,
+            guard_db: GUARD_DB,
+            new_sound_db,
         }
     }
 }
 
 /// A recognised impulse covers its take's length from its onset, and longer while its
-/// sound stays within `SOUND_DROP_DB` of its peak (said more slowly than enrolled), up to
-/// this many times the take's length. Swept over every dev set (`docs/speech-guard.md`):
-/// 4 to 10 score alike; 2 loses words of the rhythms at 150 bpm.
+/// sound goes on (said more slowly than enrolled) or dies away, up to this many times
+/// the take's length. Swept over every dev set (`docs/speech-guard.md`): 4 to 10 score
+/// alike; 2 loses words of the rhythms at 150 bpm.
 pub(super) const SPAN_STRETCH: u64 = 4;
 
 /// Recognised sounds remembered; the oldest is forgotten first.
@@ -86,11 +94,13 @@ impl Span {
     }
 }
 
-/// The newest recognised impulse, whose span grows while its sound goes on.
+/// The newest recognised impulse, whose span grows while its sound goes on or dies away.
 #[derive(Debug, Clone, Copy)]
 struct Growing {
     slot: usize,
     peak_db: f32,
+    /// Once the sound has fallen `SOUND_DROP_DB` under its peak: the lowest level since.
+    lowest_db: Option<f32>,
     /// Last sample the span may reach.
     limit: u64,
 }
@@ -98,7 +108,7 @@ struct Growing {
 /// See the module comment.
 #[derive(Debug, Clone)]
 pub(super) struct Context {
-    params: GuardParams,
+    params: ContextParams,
     /// Frames of unrecognised sound that close the guard.
     guard_frames: usize,
     spans: [Span; SPANS],
@@ -108,17 +118,17 @@ pub(super) struct Context {
 
 impl Context {
     /// A context for frames `hop_seconds` apart.
-    pub(super) fn new(params: GuardParams, hop_seconds: f64) -> Self {
+    pub(super) fn new(params: ContextParams, hop_seconds: f64) -> Self {
         Self {
             params,
-            guard_frames: (params.sound_seconds / hop_seconds).ceil() as usize,
+            guard_frames: (params.guard_sound_seconds / hop_seconds).ceil() as usize,
             spans: [Span::NONE; SPANS],
             next: 0,
             growing: None,
         }
     }
 
-    pub(super) fn params(&self) -> &GuardParams {
+    pub(super) fn params(&self) -> &ContextParams {
         &self.params
     }
 
@@ -131,9 +141,9 @@ impl Context {
         });
     }
 
-    /// An impulse that fired covers samples `from..=to`, and longer while its sound
-    /// stays within `SOUND_DROP_DB` of `peak_db` (dB), up to sample `limit`
-    /// ([`Context::follow`]).
+    /// An impulse that fired, whose sound peaked at `peak_db` (dB), covers samples
+    /// `from..=to`, and longer while its sound goes on or dies away, up to sample
+    /// `limit` ([`Context::follow`]).
     pub(super) fn fired_impulse(&mut self, from: u64, to: u64, peak_db: f32, limit: u64) {
         let slot = self.push(Span {
             from,
@@ -143,6 +153,7 @@ impl Context {
         self.growing = Some(Growing {
             slot,
             peak_db,
+            lowest_db: None,
             limit,
         });
     }
@@ -166,12 +177,25 @@ impl Context {
     }
 
     /// A new frame, centred on sample `centre` and reaching `end`, at `level_db`: the
-    /// newest impulse's span grows over it while its sound goes on.
+    /// newest impulse's span grows over it while its sound goes on (within
+    /// `SOUND_DROP_DB` of its peak) and, once it has fallen further, while it dies away:
+    /// until the level rises `new_sound_db` over the lowest it fell to, a new sound by
+    /// the quiet-before gate's measure. A word's tail in a room, or under the next word
+    /// of a quick rhythm, is still that word's sound, not unrecognised sound before the
+    /// next onset (`docs/speech-guard.md`, "A recognised sound as it dies away").
     pub(super) fn follow(&mut self, centre: u64, end: u64, level_db: f32) {
         let Some(mut g) = self.growing else { return };
-        if level_db < g.peak_db - SOUND_DROP_DB || centre > g.limit {
+        if centre > g.limit {
             self.growing = None;
             return;
+        }
+        if g.lowest_db.is_some() || level_db < g.peak_db - SOUND_DROP_DB {
+            let lowest = g.lowest_db.unwrap_or(level_db);
+            if level_db > lowest + self.params.new_sound_db {
+                self.growing = None;
+                return;
+            }
+            g.lowest_db = Some(lowest.min(level_db));
         }
         g.peak_db = g.peak_db.max(level_db);
         let span = &mut self.spans[g.slot];
@@ -199,7 +223,7 @@ impl Context {
     }
 
     /// The speech guard: whether `frames` (centre sample, level dB; the guard's span
-    /// before an onset) hold `sound_seconds` of frames within `within_db` of the new
+    /// before an onset) hold `guard_sound_seconds` of frames within `guard_db` of the new
     /// sound's `peak_db` that no recognised sound covers. A frame is judged by the
     /// sample at its centre.
     pub(super) fn follows_unrecognised_sound(
@@ -209,7 +233,7 @@ impl Context {
     ) -> bool {
         frames
             .filter(|&(centre, level)| {
-                level >= peak_db - self.params.within_db && !self.recognised_at(centre)
+                level >= peak_db - self.params.guard_db && !self.recognised_at(centre)
             })
             .count()
             >= self.guard_frames
@@ -223,7 +247,7 @@ mod tests {
     const HOP: f64 = 0.001;
 
     fn context() -> Context {
-        Context::new(GuardParams::with_span(0.65), HOP)
+        Context::new(ContextParams::new(0.65, 10.0), HOP)
     }
 
     /// Frames 1 ms apart (centres in samples of 1 kHz) from `from` for `count` frames,
@@ -265,16 +289,12 @@ mod tests {
     #[test]
     fn a_fired_impulse_covers_more_while_its_sound_goes_on_up_to_its_limit() {
         let mut c = context();
-        c.fired_impulse(0, 100, -10.0, 300);
+        c.fired_impulse(0, 100, -10.0, 1000);
         // Louder, then down to 20 dB under the new peak: still its sound.
         for centre in 90..200 {
             c.follow(centre, centre, if centre < 150 { -5.0 } else { -25.0 });
         }
         assert!(c.recognised_at(199));
-        // 20.1 dB under the peak: it has ended, and louder sound after that is not it.
-        c.follow(200, 200, -25.1);
-        c.follow(201, 201, -5.0);
-        assert!(!c.recognised_at(201));
         // The limit holds however long the sound goes on.
         let mut c = context();
         c.fired_impulse(0, 100, -10.0, 300);
@@ -282,6 +302,36 @@ mod tests {
             c.follow(centre, centre, -10.0);
         }
         assert!(c.recognised_at(300) && !c.recognised_at(301));
+    }
+
+    #[test]
+    fn a_fired_impulse_covers_its_sound_dying_away_until_a_new_sound_rises_10_db() {
+        let mut c = context();
+        c.fired_impulse(0, 100, 0.0, 1000);
+        // A tail falling from 20 to 60 dB under the peak, wavering by 1 dB.
+        for centre in 100..300 {
+            let falling = -20.0 - 40.0 * (centre - 100) as f32 / 199.0;
+            c.follow(
+                centre,
+                centre,
+                falling + if centre % 2 == 0 { 1.0 } else { 0.0 },
+            );
+        }
+        assert!(
+            c.recognised_at(299),
+            "the tail is still the impulse's sound"
+        );
+        // The next sound rises 9 dB over the tail: under a new sound's rise, still
+        // covered; then 10.5 dB over the lowest the tail fell to: a new sound.
+        c.follow(300, 300, -60.0 + 9.0);
+        assert!(c.recognised_at(300));
+        c.follow(301, 301, -60.0 + 10.5);
+        assert!(!c.recognised_at(301));
+        c.follow(302, 302, -70.0);
+        assert!(
+            !c.recognised_at(302),
+            "once ended, the span does not grow again"
+        );
     }
 
     #[test]

@@ -61,7 +61,7 @@ use serde::Serialize;
 
 use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room};
-use super::context::{Context, GuardParams, SPAN_STRETCH};
+use super::context::{Context, ContextParams, SPAN_STRETCH};
 use super::enrol::{
     first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
@@ -511,6 +511,10 @@ impl SpectralMatcher {
         } else {
             default_noise_over_floor(rate)
         };
+        let gates = GateParams {
+            min_strength: settings.min_strength,
+            ..GateParams::default()
+        };
         Self {
             rate,
             decision_frames,
@@ -548,14 +552,11 @@ impl SpectralMatcher {
             analyzer,
             finished: false,
             context: Context::new(
-                GuardParams::with_span(settings.speech_guard_seconds),
+                ContextParams::new(settings.speech_guard_seconds, gates.pre_quiet_db),
                 hop_seconds,
             ),
             waiting: None,
-            gates: GateParams {
-                min_strength: settings.min_strength,
-                ..GateParams::default()
-            },
+            gates,
             last_fired: None,
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
@@ -1287,7 +1288,7 @@ impl SpectralMatcher {
     /// whole window lies in that span.
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
-        let span = (self.context.params().span_seconds * self.rate) as u64;
+        let span = (self.context.params().guard_seconds * self.rate) as u64;
         let from = time_sample.saturating_sub(span);
         let to = self.quiet_before_span(time_sample).1;
         let frames = self.frames_inside(from, to).map(|f| {
