@@ -23,7 +23,8 @@ pub struct HeldParams {
 }
 
 /// A sound goes on while its frames stay within this many dB of its loudest: the held
-/// stage's default, and how far a recognised impulse's span stretches.
+/// stage's default, and where the context stage takes a recognised impulse's sound to
+/// be dying away ([`super::context`]).
 pub(super) const SOUND_DROP_DB: f32 = 20.0;
 
 impl Default for HeldParams {
