@@ -829,3 +829,53 @@ fn a_hit_is_one_event_whatever_comes_just_before_its_body() {
     let s = score(&events, &truth, 0.05);
     assert!(s.overall.f1 >= 0.95, "{}", onomato::eval::render_text(&s));
 }
+
+/// A held sound that begins while another is still held replaces it, and its own span
+/// covers it for the speech guard: a hit just after it is found.
+#[test]
+fn a_hit_right_after_a_held_sound_that_replaced_another_is_found() {
+    let settings = spectral();
+    let chhh = |seconds: f64, seed: u64| -> Vec<f32> {
+        brighten(&noise_burst(RATE, seconds, 1e9, seed))
+            .iter()
+            .map(|v| 0.5 * v)
+            .collect()
+    };
+    let patterns = vec![
+        Pattern::from_samples(
+            "chhh",
+            PatternKind::Continuous,
+            vec![chhh(0.4, 1)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples(
+            "hoo",
+            PatternKind::Continuous,
+            vec![buzz(RATE, 0.5, 150.0)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
+    ];
+    // A soft "chhh", the "hoo" 20 dB louder straight after it, then a kick.
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    rec.extend(chhh(0.5, 7).iter().map(|v| v * 0.1));
+    let hoo_at = rec.len() as f64 / f64::from(RATE);
+    rec.extend(buzz(RATE, 0.5, 140.0));
+    rec.extend(vec![0.0; samples_for(0.15, RATE)]);
+    let kick_at = rec.len() as f64 / f64::from(RATE);
+    rec.extend(kick(9));
+    rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    add_noise(&mut rec, 0.0005, 3);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let at = |label: &str, t: f64| {
+        events
+            .iter()
+            .any(|e| &*e.pattern == label && (e.time - t).abs() < 0.05)
+    };
+    assert!(at("hoo", hoo_at), "no hoo at {hoo_at:.3} s: {events:#?}");
+    assert!(at("b", kick_at), "no kick at {kick_at:.3} s: {events:#?}");
+}

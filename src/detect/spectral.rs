@@ -946,22 +946,10 @@ impl SpectralMatcher {
             emitted_at: self.consumed as f64 / self.rate,
             pitch: None,
         };
-        if info.kind == PatternKind::Continuous {
-            self.context.held_began(covered_from);
-        } else {
-            self.context.fired_impulse(
-                covered_from,
-                time_sample + take_length,
-                peak,
-                time_sample + SPAN_STRETCH * take_length,
-            );
-        }
-        self.last_impulse = (info.kind == PatternKind::Impulse).then_some(FiredImpulse {
-            template: best_template,
-            onset_frame,
-            strength,
-        });
-        if info.kind == PatternKind::Continuous {
+        let kind = info.kind;
+        if kind == PatternKind::Continuous {
+            // A held sound it replaces ends first, so that its end does not close the
+            // new one's span.
             let loudest = (onset_frame..self.frame_count)
                 .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
                 .fold(f32::NEG_INFINITY, f32::max);
@@ -972,7 +960,21 @@ impl SpectralMatcher {
             {
                 self.close_held(h, out);
             }
+            self.context.held_began(covered_from);
         } else {
+            self.context.fired_impulse(
+                covered_from,
+                time_sample + take_length,
+                peak,
+                time_sample + SPAN_STRETCH * take_length,
+            );
+        }
+        self.last_impulse = (kind == PatternKind::Impulse).then_some(FiredImpulse {
+            template: best_template,
+            onset_frame,
+            strength,
+        });
+        if kind == PatternKind::Impulse {
             self.track(pi);
         }
         out.push(decided);
