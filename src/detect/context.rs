@@ -6,7 +6,8 @@
 //!
 //! A recognised impulse covers its take's length from its onset, longer while its sound
 //! goes on and then while it dies away, until a new sound rises out of it
-//! ([`Context::follow`]); a held sound covers up to its end; a pattern's sound
+//! ([`Context::follow`]); a held sound covers up to its end, then its sound dying away
+//! the same way for as long as the guard looks back; a pattern's sound
 //! that only the guard stopped covers its take's length too, so the guard never feeds on
 //! its own decisions: only sounds that are none of the patterns keep it closed. It
 //! judges only the frames of the guard's span before an onset, so it opens within that
@@ -203,11 +204,19 @@ impl Context {
         self.growing = Some(g);
     }
 
-    /// A held sound ended at sample `end`: every span still open ends there.
-    pub(super) fn end_held(&mut self, end: u64) {
-        for span in &mut self.spans {
-            if span.to == u64::MAX {
+    /// A held sound ended at sample `end`, the newest frame at `level_db`: the span
+    /// still open ends there, then covers the sound as it dies away (as an impulse's
+    /// does, [`Context::follow`]) up to sample `limit`.
+    pub(super) fn end_held(&mut self, end: u64, level_db: f32, limit: u64) {
+        for (slot, span) in self.spans.iter_mut().enumerate() {
+            if span.to == u64::MAX && span.from != u64::MAX {
                 span.to = end;
+                self.growing = Some(Growing {
+                    slot,
+                    peak_db: level_db,
+                    lowest_db: Some(level_db),
+                    limit,
+                });
             }
         }
     }
@@ -335,11 +344,34 @@ mod tests {
     }
 
     #[test]
+    fn a_held_sound_covers_its_sound_dying_away_after_its_end_up_to_a_limit() {
+        let mut c = context();
+        c.held_began(0);
+        c.end_held(500, -30.0, 700);
+        for centre in 501..600 {
+            c.follow(centre, centre, -30.0 - 0.2 * (centre - 500) as f32);
+        }
+        assert!(c.recognised_at(599), "the tail is still the held sound's");
+        c.follow(600, 600, -30.0);
+        assert!(
+            !c.recognised_at(600),
+            "a sound rising 10 dB out of the tail is new"
+        );
+        let mut c = context();
+        c.held_began(0);
+        c.end_held(500, -30.0, 700);
+        for centre in 501..800 {
+            c.follow(centre, centre, -40.0);
+        }
+        assert!(c.recognised_at(700) && !c.recognised_at(701));
+    }
+
+    #[test]
     fn a_held_sound_covers_until_it_ends_and_the_oldest_span_is_forgotten() {
         let mut c = context();
         c.held_began(0);
         assert!(c.recognised_at(1_000_000));
-        c.end_held(500);
+        c.end_held(500, -60.0, 500);
         assert!(c.recognised_at(500) && !c.recognised_at(501));
         for k in 1..=SPANS as u64 {
             c.stopped(1000 * k, 1000 * k + 10);

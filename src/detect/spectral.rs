@@ -1327,7 +1327,12 @@ impl SpectralMatcher {
             + self.analyzer.win as i64 / 2
             + self.hop() as i64 / 2)
             .max(h.begin_sample as i64 + 1) as u64;
-        self.context.end_held(end_sample);
+        // Its sound dying away is still its own, for as long as the guard looks back.
+        let newest =
+            self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
+        let guard = (self.context.params().guard_seconds * self.rate) as u64;
+        self.context
+            .end_held(end_sample, newest, end_sample + guard);
         let lo = h
             .begin_sample
             .max(self.consumed.saturating_sub(self.samples.len() as u64));
