@@ -193,27 +193,26 @@ fn strength_follows_the_level_of_each_sound() {
     }
 }
 
+/// A held "chhh": bright noise with 10 ms fades.
+fn chhh(seconds: f64, seed: u64) -> Vec<f32> {
+    let x = brighten(&noise_burst(RATE, seconds, 1e9, seed));
+    let n = x.len();
+    let fade = samples_for(0.01, RATE);
+    x.iter()
+        .enumerate()
+        .map(|(i, v)| 0.5 * v * (i.min(n - 1 - i) as f32 / fade as f32).min(1.0))
+        .collect()
+}
+
+fn held(name: &str, take: Vec<f32>, settings: &DetectorSettings) -> Pattern {
+    Pattern::from_samples(name, PatternKind::Continuous, vec![take], settings).unwrap()
+}
+
 #[test]
 fn held_sounds_are_one_event_each_with_their_span() {
     let settings = spectral();
-    // A held "chhh": bright noise with 10 ms fades.
-    let chhh = |seconds: f64, seed: u64| -> Vec<f32> {
-        let x = brighten(&noise_burst(RATE, seconds, 1e9, seed));
-        let n = x.len();
-        let fade = samples_for(0.01, RATE);
-        x.iter()
-            .enumerate()
-            .map(|(i, v)| 0.5 * v * (i.min(n - 1 - i) as f32 / fade as f32).min(1.0))
-            .collect()
-    };
     let patterns = vec![
-        Pattern::from_samples(
-            "chhh",
-            PatternKind::Continuous,
-            vec![chhh(0.4, 1)],
-            &settings,
-        )
-        .unwrap(),
+        held("chhh", chhh(0.4, 1), &settings),
         Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
     ];
     let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
@@ -835,34 +834,17 @@ fn a_hit_is_one_event_whatever_comes_just_before_its_body() {
 #[test]
 fn a_hit_right_after_a_held_sound_that_replaced_another_is_found() {
     let settings = spectral();
-    let chhh = |seconds: f64, seed: u64| -> Vec<f32> {
-        brighten(&noise_burst(RATE, seconds, 1e9, seed))
-            .iter()
-            .map(|v| 0.5 * v)
-            .collect()
-    };
     let patterns = vec![
-        Pattern::from_samples(
-            "chhh",
-            PatternKind::Continuous,
-            vec![chhh(0.4, 1)],
-            &settings,
-        )
-        .unwrap(),
-        Pattern::from_samples(
-            "hoo",
-            PatternKind::Continuous,
-            vec![buzz(RATE, 0.5, 150.0)],
-            &settings,
-        )
-        .unwrap(),
+        held("chhh", chhh(0.4, 1), &settings),
+        held("hoo", buzz(RATE, 0.5, 150.0), &settings),
         Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
     ];
-    // A soft "chhh", the "hoo" 20 dB louder straight after it, then a kick.
+    // A soft "chhh", a "hoo" 20 dB louder straight after it and longer than the guard
+    // looks back, then a kick.
     let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
     rec.extend(chhh(0.5, 7).iter().map(|v| v * 0.1));
     let hoo_at = rec.len() as f64 / f64::from(RATE);
-    rec.extend(buzz(RATE, 0.5, 140.0));
+    rec.extend(buzz(RATE, 1.2, 140.0));
     rec.extend(vec![0.0; samples_for(0.15, RATE)]);
     let kick_at = rec.len() as f64 / f64::from(RATE);
     rec.extend(kick(9));
