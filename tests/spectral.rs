@@ -204,16 +204,12 @@ fn chhh(seconds: f64, seed: u64) -> Vec<f32> {
         .collect()
 }
 
-fn held(name: &str, take: Vec<f32>, settings: &DetectorSettings) -> Pattern {
-    Pattern::from_samples(name, PatternKind::Continuous, vec![take], settings).unwrap()
-}
-
 #[test]
 fn held_sounds_are_one_event_each_with_their_span() {
     let settings = spectral();
     let patterns = vec![
-        held("chhh", chhh(0.4, 1), &settings),
-        Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
+        continuous("chhh", chhh(0.4, 1), &settings),
+        impulse("b", kick(1), &settings),
     ];
     let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
     let mut truth = Vec::new();
@@ -835,9 +831,9 @@ fn a_hit_is_one_event_whatever_comes_just_before_its_body() {
 fn a_hit_right_after_a_held_sound_that_replaced_another_is_found() {
     let settings = spectral();
     let patterns = vec![
-        held("chhh", chhh(0.4, 1), &settings),
-        held("hoo", buzz(RATE, 0.5, 150.0), &settings),
-        Pattern::from_samples("b", PatternKind::Impulse, vec![kick(1)], &settings).unwrap(),
+        continuous("chhh", chhh(0.4, 1), &settings),
+        continuous("hoo", buzz(RATE, 0.5, 150.0), &settings),
+        impulse("b", kick(1), &settings),
     ];
     // A soft "chhh", a "hoo" 20 dB louder straight after it and longer than the guard
     // looks back, then a kick.

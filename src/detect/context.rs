@@ -29,10 +29,10 @@ pub(super) struct ContextParams {
     pub guard_sound_seconds: f64,
     /// ...within this many dB of the new sound's peak.
     pub guard_db: f32,
-    /// A recognised impulse's sound that has died away (`SOUND_DROP_DB` under its peak)
-    /// still covers what follows until the level rises this far (dB) over the lowest
-    /// it fell to since: the rise the quiet-before gate asks of a new sound
-    /// (`GateParams::pre_quiet_db`).
+    /// A recognised sound dying away (an impulse `SOUND_DROP_DB` under its peak, a held
+    /// sound after its end) still covers what follows until the level rises this far
+    /// (dB) over the lowest it fell to since: the rise the quiet-before gate asks of a
+    /// new sound (`GateParams::pre_quiet_db`).
     pub new_sound_db: f32,
 }
 
@@ -95,7 +95,8 @@ impl Span {
     }
 }
 
-/// The newest recognised impulse, whose span grows while its sound goes on or dies away.
+/// The newest recognised impulse (or held sound that has ended), whose span grows while
+/// its sound goes on or dies away.
 #[derive(Debug, Clone, Copy)]
 struct Growing {
     slot: usize,

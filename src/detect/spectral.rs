@@ -744,11 +744,9 @@ impl SpectralMatcher {
         self.heard_floor_db = follow(self.heard_floor_db, heard_db);
         self.levels[slot] = sound_level_db(heard_db, self.heard_floor_db);
 
-        self.context.follow(
-            self.analyzer.frame_centre(f),
-            self.analyzer.frame_centre(f) + self.hop() as u64 / 2,
-            self.levels[slot],
-        );
+        let centre = self.analyzer.frame_centre(f);
+        self.context
+            .follow(centre, centre + self.hop() as u64 / 2, self.levels[slot]);
         if let Some(onset) = self.onsets.push(&self.analyzer.power) {
             self.placer.detected(onset.frame);
         }
@@ -1283,6 +1281,11 @@ impl SpectralMatcher {
         (first..end.max(first)).filter(move |&f| f < self.frame_count && f + cap > self.frame_count)
     }
 
+    /// How far back the speech guard looks, samples.
+    fn guard_samples(&self) -> u64 {
+        (self.context.params().guard_seconds * self.rate) as u64
+    }
+
     /// Whether the `speech_guard_seconds` before an onset (up to 5 ms before it) hold
     /// enough unrecognised sound near the new sound's `peak` (dB) for the speech guard
     /// ([`Context::follows_unrecognised_sound`]): the onset is then part of a longer
@@ -1290,8 +1293,7 @@ impl SpectralMatcher {
     /// whole window lies in that span.
     fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
         let cap = self.frame_capacity as u64;
-        let span = (self.context.params().guard_seconds * self.rate) as u64;
-        let from = time_sample.saturating_sub(span);
+        let from = time_sample.saturating_sub(self.guard_samples());
         let to = self.quiet_before_span(time_sample).1;
         let frames = self.frames_inside(from, to).map(|f| {
             (
@@ -1330,9 +1332,8 @@ impl SpectralMatcher {
         // Its sound dying away is still its own, for as long as the guard looks back.
         let newest =
             self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
-        let guard = (self.context.params().guard_seconds * self.rate) as u64;
         self.context
-            .end_held(end_sample, newest, end_sample + guard);
+            .end_held(end_sample, newest, end_sample + self.guard_samples());
         let lo = h
             .begin_sample
             .max(self.consumed.saturating_sub(self.samples.len() as u64));
