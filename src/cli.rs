@@ -237,6 +237,10 @@ pub struct PatternSource {
     /// patterns, such as speech; 0 turns the guard off (overrides the config).
     #[arg(long, value_name = "SECONDS")]
     pub speech_guard: Option<f64>,
+    /// Spectral method: a recording of sounds that must never fire (you talking, the
+    /// room), repeatable; added to the config's `background` list.
+    #[arg(long, value_name = "FILE.wav")]
+    pub background: Vec<PathBuf>,
     /// With a config of [[performer]]s: this performer's patterns and channel alone
     /// (`listen` runs every performer without it).
     #[arg(long, value_name = "NAME")]
@@ -358,6 +362,10 @@ impl PatternSource {
             }
             config.detector.speech_guard_seconds = guard;
         }
+        config
+            .detector
+            .background
+            .extend(self.background.iter().cloned());
         config.detector.validate("command line")?;
         config.check_pattern_thresholds("command line")?;
         if config.patterns.is_empty() && config.performers.is_empty() {
@@ -483,6 +491,14 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
                 p.takes.len(),
                 p.max_len() as f64 * 1000.0 / f64::from(lane.detector.sample_rate),
                 p.threshold
+            );
+        }
+        for (path, model) in crate::detect::own_background(&lane.detector)? {
+            let _ = writeln!(
+                err,
+                "{who}background '{}': {} sounds that must never fire",
+                path.display(),
+                model.len()
             );
         }
         for warning in pattern::look_alike_patterns(patterns, &lane.detector)? {

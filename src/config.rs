@@ -282,6 +282,8 @@ struct RawSpectral {
     max_decision_seconds: Option<f64>,
     speech_guard_seconds: Option<f64>,
     min_strength: Option<f64>,
+    #[serde(default)]
+    background: Vec<PathBuf>,
 }
 
 /// `[detector.waveform]`: settings only the waveform method has.
@@ -372,6 +374,10 @@ pub struct DetectorSettings {
     /// Channel of multi-channel inputs (`None`: mix all channels). Mono files are used
     /// as they are.
     pub channel: Option<u16>,
+    /// Spectral method: recordings (WAV) of sounds that must never fire, such as the
+    /// user talking or the room: every onset in them that stands out of its quiet joins
+    /// the built-in background of speech (`docs/background.md`).
+    pub background: Vec<PathBuf>,
 }
 
 impl Default for DetectorSettings {
@@ -388,6 +394,7 @@ impl Default for DetectorSettings {
             max_decision_seconds: 0.055,
             speech_guard_seconds: 0.65,
             min_strength: 0.06,
+            background: Vec::new(),
         }
     }
 }
@@ -853,6 +860,7 @@ impl RawConfig {
                 .speech_guard_seconds
                 .unwrap_or(defaults.speech_guard_seconds),
             min_strength: spectral.min_strength.unwrap_or(defaults.min_strength),
+            background: spectral.background.iter().map(|p| base.join(p)).collect(),
         };
         detector.validate(origin)?;
 
@@ -1305,6 +1313,15 @@ impl DetectorSettings {
                     format!("suppression_seconds must be between 0 and 5, found {s}"),
                 ));
             }
+        }
+        if self.method != Method::Spectral && !self.background.is_empty() {
+            return Err(invalid(
+                &item,
+                format!(
+                    "background is a setting of the spectral method (the built-in background of speech that it joins belongs to it); the method here is \"{}\"",
+                    self.method.name()
+                ),
+            ));
         }
         let d = self.decision_seconds;
         if !(d.is_finite() && (0.015..=0.2).contains(&d)) {

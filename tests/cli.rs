@@ -403,6 +403,30 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
             "--pattern 'tick': expected NAME=FILE.wav",
         ),
         (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--background",
+                "missing.wav",
+            ],
+            "background recording: cannot open 'missing.wav'",
+        ),
+        (
+            &[
+                "analyze",
+                "examples/beat.wav",
+                "-c",
+                "config/onomato.toml",
+                "--method",
+                "waveform",
+                "--background",
+                "examples/beat.wav",
+            ],
+            "background is a setting of the spectral method",
+        ),
+        (
             &["check", "--config", "config/missing.toml"],
             "cannot read config 'config/missing.toml'",
         ),
@@ -442,6 +466,21 @@ fn check_accepts_the_example_and_refuses_a_broken_config() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("configuration is valid"));
     assert!(stderr(&out).contains("pattern 'hoo' (continuous): 1 take(s)"));
+    // A background recording is loaded and pooled too.
+    let out = onomato(&[
+        "check",
+        "--config",
+        "config/onomato.toml",
+        "--background",
+        "examples/beat.wav",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("background 'examples/beat.wav': ")
+            && stderr(&out).contains(" sounds that must never fire"),
+        "{}",
+        stderr(&out)
+    );
 
     let dir = temp_dir("check");
     let broken = dir.join("broken.toml");

@@ -107,6 +107,7 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         ("[detector.waveform]\nsuppression_seconds = 0.1\n", &["[detector.waveform] is for method = \"waveform\", but this config's method is \"spectral\""]),
         ("[detector]\nmethod = \"waveform\"\n[detector.spectral]\nmin_strength = 0.1\n", &["[detector.spectral] is for method = \"spectral\", but this config's method is \"waveform\""]),
         ("[detector.spectral]\nsuppression_seconds = 0.1\n", &["unknown field `suppression_seconds`", "min_strength"]),
+        ("[detector.spectral]\nbackground = \"talking.wav\"\n", &["invalid type", "expected a sequence"]),
         (&format!("{TICK}threshold = 0\n"), &["pattern #1 ('tick')", "threshold must be greater than 0 and at most 1, found 0"]),
         ("[[pattern]]\nname = \"tick\"\ntakes = []\n", &["pattern #1 ('tick')", "takes is empty; expected at least one WAV file"]),
         ("[[pattern]]\nname = \"tick\"\n", &["missing field `takes`"]),
@@ -214,6 +215,35 @@ fn take_paths_are_relative_to_the_config_file() {
     assert_eq!(
         config.patterns[0].takes[0],
         Path::new("/srv/voice/tick.wav")
+    );
+}
+
+#[test]
+fn background_recordings_are_relative_to_the_config_file_and_the_spectral_methods() {
+    let toml = format!(
+        "{TICK}[detector.spectral]\nbackground = [\"me/talking.wav\", \"/rec/room.wav\"]\n"
+    );
+    let config = Config::parse(&toml, Path::new("/srv/voice"), "x").unwrap();
+    assert_eq!(
+        config.detector.background,
+        [
+            Path::new("/srv/voice/me/talking.wav"),
+            Path::new("/rec/room.wav")
+        ]
+    );
+    assert!(Config::parse(TICK, Path::new("/srv/voice"), "x")
+        .unwrap()
+        .detector
+        .background
+        .is_empty());
+    // Given on the command line with the paper's method: refused, not ignored.
+    let mut waveform = config.detector.clone();
+    waveform.method = Method::Waveform;
+    let msg = waveform.validate("command line").unwrap_err().to_string();
+    assert!(
+        msg.contains("background is a setting of the spectral method")
+            && msg.contains("\"waveform\""),
+        "{msg}"
     );
 }
 

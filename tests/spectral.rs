@@ -857,3 +857,47 @@ fn a_hit_right_after_a_held_sound_that_replaced_another_is_found() {
     assert!(at("hoo", hoo_at), "no hoo at {hoo_at:.3} s: {events:#?}");
     assert!(at("b", kick_at), "no kick at {kick_at:.3} s: {events:#?}");
 }
+
+/// A sound that is not the user's "pew" but near it (a sweep from a little lower), as a
+/// syllable of the user's own talking can be: it fires as "pew" until a recording of
+/// such sounds is given as `background`, and then it does not, while "pew" itself
+/// still does.
+#[test]
+fn a_sound_in_the_background_recording_no_longer_fires_and_the_pattern_still_does() {
+    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
+    let alike = || sweep(RATE, 0.150, 2000.0, 600.0, 0.080);
+    let gap = samples_for(0.6, RATE);
+    let mut talking = vec![0.0f32; 8 * gap];
+    for k in 1..7 {
+        place(&mut talking, &alike(), k * gap, 0.8);
+    }
+    add_noise(&mut talking, 1e-4, 3);
+    let dir = temp_dir("background");
+    let talking_wav = dir.join("talking.wav");
+    write_wav_f32(&talking_wav, &talking, RATE);
+
+    let mut rec = vec![0.0f32; 5 * gap];
+    for k in [1, 3] {
+        place(&mut rec, &alike(), k * gap, 0.7);
+    }
+    for k in [2, 4] {
+        place(&mut rec, &take, k * gap, 0.7);
+    }
+    add_noise(&mut rec, 1e-4, 4);
+    let at = |k: usize| (k * gap) as f64 / f64::from(RATE);
+    let fired = |settings: &DetectorSettings| {
+        let patterns = vec![impulse("pew", take.clone(), settings)];
+        let (events, outcomes) = detect_explained(patterns, settings, &rec);
+        let times: Vec<f64> = events.iter().map(|e| e.time).collect();
+        let near = |k: usize| times.iter().any(|t| (t - at(k)).abs() < 0.01);
+        ([1, 2, 3, 4].map(near), format!("{events:?}; {outcomes:?}"))
+    };
+    let (without, why) = fired(&spectral());
+    assert_eq!(without, [true; 4], "without a background recording: {why}");
+    let with_talking = DetectorSettings {
+        background: vec![talking_wav],
+        ..spectral()
+    };
+    let (with, why) = fired(&with_talking);
+    assert_eq!(with, [false, true, false, true], "with it: {why}");
+}

@@ -8,7 +8,9 @@
 //! The model is made by `scripts/background-speech.sh` (espeak-ng and sox) and
 //! `cargo run --release --example background_model`, and embedded at build time. Its
 //! features are pooled over the decision window it was made with; a detector with
-//! another `decision_seconds` does not use it.
+//! another `decision_seconds` does not use it. A user's own recordings of sounds that
+//! must never fire (their talking, the room; `background` in `[detector.spectral]`) are
+//! pooled by the matcher that uses them and joined to it ([`BackgroundModel::joined`]).
 //!
 //! Runs on the detector thread, inside the spectral matcher; parses the model in `new`
 //! and allocates nothing afterwards.
@@ -77,6 +79,28 @@ impl BackgroundModel {
         } else {
             Self::default()
         }
+    }
+
+    /// This model's templates and `other`'s, which must be pooled alike (an empty
+    /// model takes the other's shape).
+    pub fn joined(&self, other: &BackgroundModel) -> Self {
+        if self.is_empty() {
+            return other.clone();
+        }
+        if other.is_empty() {
+            return self.clone();
+        }
+        debug_assert_eq!(
+            self.shape(),
+            other.shape(),
+            "background models pooled alike"
+        );
+        let templates = self.templates.iter().chain(other.templates.iter());
+        Self::new(
+            self.features,
+            self.decision_frames,
+            templates.copied().collect(),
+        )
     }
 
     /// The best similarity (cosine) of `instance` with any template; minus infinity
@@ -151,6 +175,20 @@ mod tests {
         assert!((back.nearest(&[0.0, 1.0, 0.0]) - 0.8).abs() < 1e-4);
         let truncated = &model.to_bytes()[..20];
         assert!(BackgroundModel::from_bytes(truncated).is_err());
+    }
+
+    #[test]
+    fn joined_models_hold_both_and_an_empty_one_takes_the_others_shape() {
+        let a = BackgroundModel::new(3, 5, vec![1.0, 0.0, 0.0]);
+        let b = BackgroundModel::new(3, 5, vec![0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        let both = a.joined(&b);
+        assert_eq!((both.len(), both.shape()), (3, (3, 5)));
+        for probe in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+            assert!((both.nearest(&probe) - 1.0).abs() < 1e-6);
+        }
+        let from_empty = BackgroundModel::default().joined(&b);
+        assert_eq!((from_empty.len(), from_empty.shape()), (2, (3, 5)));
+        assert_eq!(a.joined(&BackgroundModel::default()).len(), 1);
     }
 
     #[test]

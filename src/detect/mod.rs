@@ -22,13 +22,15 @@ mod place;
 pub mod spectral;
 pub mod waveform;
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use serde::{Serialize, Serializer};
 
-use crate::audio::{AudioError, StreamResampler};
+use crate::audio::{resample_clip, AudioError, ChannelSelect, StreamResampler, WavSource};
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
+use background::BackgroundModel;
 pub use gates::Outcome;
 pub use spectral::{AlikePair, OnsetRecord, SpectralMatcher};
 pub use waveform::WaveformMatcher;
@@ -157,6 +159,37 @@ pub enum DetectError {
     InputRate(u32),
     #[error(transparent)]
     Audio(#[from] AudioError),
+    #[error("background recording: {0}")]
+    BackgroundAudio(AudioError),
+    #[error("background recording '{}' has no sound that stands out of its quiet; expected a recording of what must never fire (you talking, the room), at least a few seconds of it", .0.display())]
+    EmptyBackground(PathBuf),
+}
+
+/// The background recordings of `settings` (spectral method), each pooled as a matcher
+/// with `settings` pools onsets ([`spectral::background_model`]), with its path. An
+/// error names the file.
+pub fn own_background(
+    settings: &DetectorSettings,
+) -> Result<Vec<(PathBuf, BackgroundModel)>, DetectError> {
+    let select = settings
+        .channel
+        .map_or(ChannelSelect::Mix, ChannelSelect::Index);
+    settings
+        .background
+        .iter()
+        .map(|path| {
+            let mut source = WavSource::open(path, select).map_err(DetectError::BackgroundAudio)?;
+            let rate = source.sample_rate();
+            let samples = source.read_all().map_err(DetectError::BackgroundAudio)?;
+            let samples = resample_clip(&samples, rate, settings.sample_rate)
+                .map_err(DetectError::BackgroundAudio)?;
+            let model = spectral::background_model(&samples, settings);
+            if model.is_empty() {
+                return Err(DetectError::EmptyBackground(path.clone()));
+            }
+            Ok((path.clone(), model))
+        })
+        .collect()
 }
 
 /// The streaming detector: resampler, matcher, event numbering.
@@ -202,7 +235,11 @@ impl Detector {
                 Matcher::Waveform(Box::new(WaveformMatcher::new(patterns, settings)))
             }
             Method::Spectral => {
-                Matcher::Spectral(Box::new(SpectralMatcher::new(patterns, settings)))
+                let mut matcher = SpectralMatcher::new(patterns, settings);
+                for (_, own) in own_background(settings)? {
+                    matcher.add_background(&own);
+                }
+                Matcher::Spectral(Box::new(matcher))
             }
         };
         let resampler = if input_rate == settings.sample_rate {

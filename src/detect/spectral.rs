@@ -574,6 +574,14 @@ impl SpectralMatcher {
         }
     }
 
+    /// Adds `own` (made by [`background_model`] with this matcher's settings, from a
+    /// recording of sounds that must never fire: the user talking, the room) to the
+    /// sounds an onset is compared with besides the patterns. Called while the
+    /// detector is built, never per block.
+    pub fn add_background(&mut self, own: &BackgroundModel) {
+        self.background = self.background.joined(own);
+    }
+
     /// Keeps a record of every onset from now on (grows with the stream: offline).
     pub fn enable_explain(&mut self) {
         self.explain.get_or_insert_with(Vec::new);
