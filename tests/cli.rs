@@ -542,6 +542,18 @@ fn listen_mistakes_are_named_and_exit_1() {
             "--osc: expected HOST:PORT",
         ),
         (
+            &[
+                "listen",
+                "-c",
+                "config/onomato.toml",
+                "--input",
+                "examples/beat.wav",
+                "--background",
+                "no/talking.wav",
+            ],
+            "background recording: cannot open 'no/talking.wav'",
+        ),
+        (
             &["listen", "--input", "examples/beat.wav"],
             "no patterns to detect",
         ),
