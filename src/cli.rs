@@ -111,6 +111,19 @@ pub struct RecordArgs {
     /// pattern goes into its [[performer.pattern]] sections.
     #[arg(long, value_name = "NAME", requires = "config")]
     pub performer: Option<String>,
+    /// Record what must never fire instead of a pattern: you talking as you do between
+    /// your sounds (spectral method). Saved as NAME.wav and added to the config's
+    /// `background` list; from --input, the whole file.
+    #[arg(long, conflicts_with_all = ["continuous", "takes"])]
+    pub background: bool,
+    /// With --background: how long to record from the microphone, seconds.
+    #[arg(
+        long,
+        default_value_t = 60.0,
+        value_name = "SECONDS",
+        requires = "background"
+    )]
+    pub seconds: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -546,6 +559,9 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
     if !(1..=20).contains(&args.takes) {
         anyhow::bail!("--takes must be from 1 to 20, found {}", args.takes);
     }
+    if !(args.seconds.is_finite() && (5.0..=600.0).contains(&args.seconds)) {
+        anyhow::bail!("--seconds must be from 5 to 600, found {}", args.seconds);
+    }
     let config = match &args.config {
         Some(path) => Config::load(path)?,
         None => Config::default(),
@@ -578,6 +594,7 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
         input: args.input.clone(),
         max_seconds: config.detector.max_pattern_seconds,
         input_settings,
+        background_seconds: args.background.then_some(args.seconds),
     };
     let mut err = std::io::stderr().lock();
     crate::record::record(&options, &mut err)?;

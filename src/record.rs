@@ -4,7 +4,9 @@
 //! clipped, too short or too long takes are refused with the reason, and the microphone
 //! asks again), saved as a WAV file beside the config, and the pattern is added to the
 //! config, or its takes replaced, without touching the rest of the file (toml_edit
-//! keeps the user's comments and layout).
+//! keeps the user's comments and layout). With `--background`, a recording of the user
+//! talking (what must never fire) is taken whole instead, checked to hold sounds the
+//! detector pools, saved, and added to `[detector.spectral] background`.
 //!
 //! Runs on the main thread of `onomato record`; the microphone's samples arrive through
 //! the same ring as the daemon's.
@@ -13,6 +15,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+use rtrb::Consumer;
 
 use crate::audio::ChannelSelect;
 use crate::config::{Config, InputSettings, PatternKind};
@@ -216,6 +220,32 @@ pub fn update_config_text(
     Ok(doc.to_string())
 }
 
+/// Adds `file` to the `background` list of `[detector.spectral]` in the config text
+/// (once), and leaves everything else as it was.
+pub fn add_background_to_config_text(text: &str, file: &str) -> Result<String, String> {
+    let mut doc: toml_edit::DocumentMut = text
+        .parse()
+        .map_err(|e: toml_edit::TomlError| e.to_string())?;
+    let spectral = doc
+        .entry("detector")
+        .or_insert(toml_edit::table())
+        .as_table_mut()
+        .ok_or("'detector' is not a table ([detector])")?
+        .entry("spectral")
+        .or_insert(toml_edit::table())
+        .as_table_mut()
+        .ok_or("'detector.spectral' is not a table ([detector.spectral])")?;
+    let list = spectral
+        .entry("background")
+        .or_insert(toml_edit::value(toml_edit::Array::new()))
+        .as_array_mut()
+        .ok_or("'background' in [detector.spectral] is not a list of files")?;
+    if !list.iter().any(|v| v.as_str() == Some(file)) {
+        list.push(file);
+    }
+    Ok(doc.to_string())
+}
+
 /// Options of `record`.
 #[derive(Debug, Clone)]
 pub struct RecordOptions {
@@ -233,6 +263,9 @@ pub struct RecordOptions {
     pub input: Option<PathBuf>,
     pub max_seconds: f64,
     pub input_settings: InputSettings,
+    /// Records a background recording of this many seconds (from the microphone; the
+    /// whole of `input` otherwise) instead of a pattern's takes.
+    pub background_seconds: Option<f64>,
 }
 
 /// What `record` did.
@@ -266,6 +299,11 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
         saved: Vec::new(),
         refused: Vec::new(),
     };
+    if let Some(seconds) = options.background_seconds {
+        let saved = record_background(options, seconds, config_text.as_deref(), &dir, err)?;
+        report.saved.push(saved);
+        return Ok(report);
+    }
     let mut good: Vec<(Vec<f32>, u32)> = Vec::new();
     match &options.input {
         Some(path) => {
@@ -394,21 +432,8 @@ fn record_from_microphone(
     let window = options.max_seconds + 1.5;
     while good.len() < options.takes && attempts < options.takes * 3 {
         attempts += 1;
-        for n in (1..=3).rev() {
-            let _ = write!(
-                err,
-                "\rtake {} of {}: {n}... ",
-                good.len() + 1,
-                options.takes
-            );
-            let _ = err.flush();
-            std::thread::sleep(Duration::from_millis(700));
-        }
-        // Drop what came during the countdown.
-        let stale = consumer.slots();
-        if let Ok(chunk) = consumer.read_chunk(stale) {
-            chunk.commit_all();
-        }
+        let what = format!("take {} of {}", good.len() + 1, options.takes);
+        count_down(&what, &mut consumer, err);
         let _ = writeln!(
             err,
             "\rtake {} of {}: now!            ",
@@ -418,42 +443,15 @@ fn record_from_microphone(
         let mut mono: Vec<f32> = Vec::new();
         let started = Instant::now();
         let mut last_sound: Option<Instant> = None;
-        let mut frame = vec![0.0f32; 1024 * channels];
-        // The level shown ten times a second: the loudest since the last.
-        let mut shown_peak = -120.0f64;
-        let mut last_shown = Instant::now();
+        let mut meter = Meter::new(channels, options.channel);
         while started.elapsed().as_secs_f64() < window {
-            let frames = (consumer.slots() / channels).min(1024);
-            if frames == 0 {
-                std::thread::sleep(Duration::from_millis(5));
+            let Some((block, db)) = meter.next_block(&mut consumer, err) else {
                 continue;
-            }
-            let _ = consumer.pop_partial_slice(&mut frame[..frames * channels]);
-            let block: Vec<f32> = frame[..frames * channels]
-                .chunks_exact(channels)
-                .map(|f| match options.channel {
-                    ChannelSelect::Index(i) if usize::from(i) < channels => f[usize::from(i)],
-                    _ => f.iter().sum::<f32>() / channels as f32,
-                })
-                .collect();
-            let peak = block.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-            let db = 20.0 * f64::from(peak.max(1e-6)).log10();
-            shown_peak = shown_peak.max(db);
-            if last_shown.elapsed() >= Duration::from_millis(100) {
-                let bars = (((shown_peak + 60.0) / 60.0).clamp(0.0, 1.0) * 30.0) as usize;
-                let _ = write!(
-                    err,
-                    "\r  level {:<30} {shown_peak:6.1} dB",
-                    "#".repeat(bars)
-                );
-                let _ = err.flush();
-                last_shown = Instant::now();
-                shown_peak = -120.0;
-            }
+            };
             if db > SILENCE_DBFS + 15.0 {
                 last_sound = Some(Instant::now());
             }
-            mono.extend_from_slice(&block);
+            mono.extend_from_slice(block);
             // The sound is over after 0.5 s of quiet.
             if last_sound.is_some_and(|t| t.elapsed() > Duration::from_millis(500)) {
                 break;
@@ -488,4 +486,187 @@ fn record_from_microphone(
     }
     drop(capture);
     Ok(good)
+}
+
+/// "3... 2... 1..." after `what` on `err`, then drops what the microphone heard meanwhile.
+fn count_down(what: &str, consumer: &mut Consumer<f32>, err: &mut dyn Write) {
+    for n in (1..=3).rev() {
+        let _ = write!(err, "\r{what}: {n}... ");
+        let _ = err.flush();
+        std::thread::sleep(Duration::from_millis(700));
+    }
+    let stale = consumer.slots();
+    if let Ok(chunk) = consumer.read_chunk(stale) {
+        chunk.commit_all();
+    }
+}
+
+/// Mono blocks of the microphone's ring (the recorded channel, or the mix), with the
+/// level shown on stderr ten times a second: the loudest since the last.
+struct Meter {
+    channels: usize,
+    select: ChannelSelect,
+    frame: Vec<f32>,
+    block: Vec<f32>,
+    shown_peak: f64,
+    last_shown: Instant,
+}
+
+impl Meter {
+    fn new(channels: usize, select: ChannelSelect) -> Self {
+        Self {
+            channels,
+            select,
+            frame: vec![0.0; 1024 * channels],
+            block: Vec::with_capacity(1024),
+            shown_peak: -120.0,
+            last_shown: Instant::now(),
+        }
+    }
+
+    /// The next block and its peak (dBFS), or `None` after a short wait when the ring
+    /// is empty.
+    fn next_block(
+        &mut self,
+        consumer: &mut Consumer<f32>,
+        err: &mut dyn Write,
+    ) -> Option<(&[f32], f64)> {
+        let channels = self.channels;
+        let frames = (consumer.slots() / channels).min(1024);
+        if frames == 0 {
+            std::thread::sleep(Duration::from_millis(5));
+            return None;
+        }
+        let _ = consumer.pop_partial_slice(&mut self.frame[..frames * channels]);
+        let select = self.select;
+        self.block.clear();
+        self.block.extend(
+            self.frame[..frames * channels]
+                .chunks_exact(channels)
+                .map(|f| match select {
+                    ChannelSelect::Index(i) if usize::from(i) < channels => f[usize::from(i)],
+                    _ => f.iter().sum::<f32>() / channels as f32,
+                }),
+        );
+        let peak = self.block.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        let db = 20.0 * f64::from(peak.max(1e-6)).log10();
+        self.shown_peak = self.shown_peak.max(db);
+        if self.last_shown.elapsed() >= Duration::from_millis(100) {
+            let bars = (((self.shown_peak + 60.0) / 60.0).clamp(0.0, 1.0) * 30.0) as usize;
+            let _ = write!(
+                err,
+                "\r  level {:<30} {:6.1} dB",
+                "#".repeat(bars),
+                self.shown_peak
+            );
+            let _ = err.flush();
+            self.last_shown = Instant::now();
+            self.shown_peak = -120.0;
+        }
+        Some((&self.block, db))
+    }
+}
+
+/// `record NAME --background`: `seconds` of the user talking as they do between hits
+/// (from the microphone; the whole of `--input` otherwise), saved as NAME.wav in `dir`
+/// once the detector finds sounds in it, and added to the config's `background` list.
+fn record_background(
+    options: &RecordOptions,
+    seconds: f64,
+    config_text: Option<&str>,
+    dir: &Path,
+    err: &mut dyn Write,
+) -> anyhow::Result<PathBuf> {
+    use anyhow::{bail, Context};
+    let detector = match &options.config {
+        Some(path) => Config::load(path)?.detector,
+        None => crate::config::DetectorSettings::default(),
+    };
+    if detector.method != crate::config::Method::Spectral {
+        bail!(
+            "a background recording is for the spectral method; the config's method is \"{}\"",
+            detector.method.name()
+        );
+    }
+    let (samples, rate) = match &options.input {
+        Some(path) => {
+            let mut source = crate::audio::WavSource::open(path, options.channel)?;
+            let rate = source.sample_rate();
+            (source.read_all()?, rate)
+        }
+        None => record_talking(options, seconds, err)?,
+    };
+    let at_rate = crate::audio::resample_clip(&samples, rate, detector.sample_rate)?;
+    let sounds = crate::detect::spectral::background_model(&at_rate, &detector).len();
+    if sounds == 0 {
+        bail!(
+            "nothing in the recording stands out of its quiet ({:.1} s): talk as you do between hits, closer to the microphone",
+            samples.len() as f64 / f64::from(rate.max(1))
+        );
+    }
+    let file = match &options.performer {
+        Some(who) => format!("{who}-{}.wav", options.name),
+        None => format!("{}.wav", options.name),
+    };
+    let path = dir.join(&file);
+    write_take(&path, &samples, rate)?;
+    let _ = writeln!(
+        err,
+        "saved {} ({:.1} s, {sounds} sounds that must never fire)",
+        path.display(),
+        samples.len() as f64 / f64::from(rate)
+    );
+    match (&options.config, config_text) {
+        (Some(config), Some(text)) => {
+            let updated = add_background_to_config_text(text, &file)
+                .map_err(|m| anyhow::anyhow!("cannot update config '{}': {m}", config.display()))?;
+            // The new config must load, its background included, before it replaces
+            // the old one.
+            let base = config.parent().unwrap_or(Path::new("."));
+            let origin = format!("config '{}'", config.display());
+            let parsed = Config::parse(&updated, base, &origin)?;
+            crate::detect::own_background(&parsed.detector)?;
+            let temp = config.with_extension("toml.new");
+            std::fs::write(&temp, updated)
+                .with_context(|| format!("cannot write '{}'", temp.display()))?;
+            std::fs::rename(&temp, config)
+                .with_context(|| format!("cannot replace config '{}'", config.display()))?;
+            let _ = writeln!(err, "background '{file}' written to {}", config.display());
+        }
+        _ => {
+            let _ = writeln!(err, "use it with: --background {}", path.display());
+        }
+    }
+    Ok(path)
+}
+
+/// `seconds` of the microphone after a countdown, the level shown as it records.
+fn record_talking(
+    options: &RecordOptions,
+    seconds: f64,
+    err: &mut dyn Write,
+) -> anyhow::Result<(Vec<f32>, u32)> {
+    let status = Arc::new(Status::default());
+    let (capture, mut consumer) = input::open_capture(&options.input_settings, status, |_| {})?;
+    let rate = capture.rate;
+    let _ = writeln!(
+        err,
+        "talk as you do between your sounds for {seconds:.0} s (leave the enrolled sounds out)"
+    );
+    count_down("background", &mut consumer, err);
+    let _ = writeln!(err, "\rbackground: now!            ");
+    let wanted = (seconds * f64::from(rate)) as usize;
+    let mut mono = Vec::with_capacity(wanted);
+    let mut meter = Meter::new(usize::from(capture.channels).max(1), options.channel);
+    let started = Instant::now();
+    // The ring is read as it fills; a stalled device ends the recording a second late.
+    while mono.len() < wanted && started.elapsed().as_secs_f64() < seconds + 1.0 {
+        if let Some((block, _)) = meter.next_block(&mut consumer, err) {
+            mono.extend_from_slice(block);
+        }
+    }
+    mono.truncate(wanted);
+    let _ = writeln!(err);
+    drop(capture);
+    Ok((mono, rate))
 }

@@ -751,6 +751,61 @@ fn record_takes_sounds_from_the_microphone_and_asks_again_after_a_clipped_one() 
 }
 
 #[test]
+fn record_background_takes_seconds_of_the_microphone_and_finds_its_sounds() {
+    let _one_at_a_time = REAL_TIME_AUDIO.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = common::temp_dir("record-background-pulse");
+    let pulse = Pulse::start(&dir);
+    let rate = 44_100;
+    // Four syllable-like sounds 0.8 s apart, as talking gives them.
+    let mut talking = vec![0.0f32; common::samples_for(3.6, rate)];
+    for k in 0..4 {
+        let at = common::samples_for(0.3 + 0.8 * k as f64, rate);
+        common::place(
+            &mut talking,
+            &common::buzz(rate, 0.25, 120.0 + 30.0 * k as f64),
+            at,
+            0.4,
+        );
+    }
+    let stereo: Vec<Vec<f32>> = talking.iter().map(|&v| vec![v, v]).collect();
+    let talking_wav = dir.join("talking-play.wav");
+    common::write_wav_int(&talking_wav, &stereo, rate, 16);
+    let log = dir.join("record.err");
+    let mut cmd = Command::new(BIN);
+    cmd.args(["record", "me", "--background", "--seconds", "5", "--dir"])
+        .arg(&dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(fs::File::create(&log).unwrap());
+    let mut child = pulse.env(&mut cmd).spawn().unwrap();
+    let start = Instant::now();
+    while !read(&log).contains("background: now!") {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "no countdown: {}",
+            read(&log)
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    pulse.play(&talking_wav.to_string_lossy());
+    let status = wait_exit(&mut child, Duration::from_secs(20));
+    let text = read(&log);
+    assert!(status.success(), "{text}");
+    let saved = dir.join("me.wav");
+    let r = hound::WavReader::open(&saved).unwrap_or_else(|e| panic!("{}: {e}", saved.display()));
+    let seconds = r.duration() as f64 / f64::from(r.spec().sample_rate);
+    assert!((seconds - 5.0).abs() < 0.05, "{seconds} s: {text}");
+    let sounds: usize = text
+        .split(" sounds that must never fire")
+        .next()
+        .and_then(|head| head.rsplit(", ").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count of sounds: {text}"));
+    assert!((4..=8).contains(&sounds), "{sounds} sounds: {text}");
+    assert!(text.contains("use it with: --background "), "{text}");
+}
+
+#[test]
 fn an_unreachable_osc_target_does_not_stop_the_daemon() {
     let dir = common::temp_dir("listen-unreachable");
     let osc = OscDump::start(&dir);

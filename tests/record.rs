@@ -297,3 +297,77 @@ fn record_for_a_performer_takes_its_channel_and_writes_its_own_pattern() {
     assert_eq!(code, Some(1));
     assert!(log.contains("name one with --performer"), "{log}");
 }
+
+/// `record NAME --background --input FILE`: the whole file becomes a background
+/// recording, saved beside the config and added to `[detector.spectral] background`
+/// (the rest of the config as it was); a file with nothing in it, or a config of the
+/// waveform method, is refused and the config left alone.
+#[test]
+fn record_background_from_a_file_adds_it_to_the_config_and_refuses_silence() {
+    let dir = temp_dir("record-background");
+    let rate = 22_050;
+    let mut talking = vec![0.0f32; samples_for(4.0, rate)];
+    for k in 0..4 {
+        let at = samples_for(0.3 + 0.9 * k as f64, rate);
+        place(
+            &mut talking,
+            &buzz(rate, 0.25, 110.0 + 25.0 * k as f64),
+            at,
+            0.4,
+        );
+    }
+    add_noise(&mut talking, 0.0003, 8);
+    let input = dir.join("talking-source.wav");
+    write_wav_f32(&input, &talking, rate);
+    let (config, original) = voice_config(&dir);
+
+    let (code, log) = record_with(&["talking", "--background"], &config, &input);
+    assert_eq!(code, Some(0), "{log}");
+    assert!(log.contains("sounds that must never fire"), "{log}");
+    assert!(dir.join("talking.wav").exists());
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(text.contains("# A comment that must survive."), "{text}");
+    assert!(
+        text.contains("threshold = 0.5   # kept as written"),
+        "{text}"
+    );
+    assert!(text.contains("[detector.spectral]"), "{text}");
+    assert!(text.contains("background = [\"talking.wav\"]"), "{text}");
+    // Again: the list holds it once.
+    let (code, log) = record_with(&["talking", "--background"], &config, &input);
+    assert_eq!(code, Some(0), "{log}");
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert_eq!(text.matches("talking.wav").count(), 1, "{text}");
+    let check = Command::new(env!("CARGO_BIN_EXE_onomato"))
+        .args(["check", "--config"])
+        .arg(&config)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&check.stderr).to_string();
+    assert!(check.status.success(), "{said}");
+    assert!(said.contains("talking.wav': "), "{said}");
+
+    let mut silence = vec![0.0f32; samples_for(3.0, rate)];
+    add_noise(&mut silence, 0.0003, 9);
+    let quiet = dir.join("silence.wav");
+    write_wav_f32(&quiet, &silence, rate);
+    std::fs::write(&config, &original).unwrap();
+    let (code, log) = record_with(&["room", "--background"], &config, &quiet);
+    assert_eq!(code, Some(1), "{log}");
+    assert!(
+        log.contains("nothing in the recording stands out of its quiet"),
+        "{log}"
+    );
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), original);
+    assert!(!dir.join("room.wav").exists());
+
+    let waveform = original.replace("[detector]\n", "[detector]\nmethod = \"waveform\"\n");
+    std::fs::write(&config, &waveform).unwrap();
+    let (code, log) = record_with(&["talking", "--background"], &config, &input);
+    assert_eq!(code, Some(1), "{log}");
+    assert!(
+        log.contains("a background recording is for the spectral method"),
+        "{log}"
+    );
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), waveform);
+}
