@@ -559,8 +559,12 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
     if !(1..=20).contains(&args.takes) {
         anyhow::bail!("--takes must be from 1 to 20, found {}", args.takes);
     }
-    if !(args.seconds.is_finite() && (5.0..=600.0).contains(&args.seconds)) {
-        anyhow::bail!("--seconds must be from 5 to 600, found {}", args.seconds);
+    let longest = crate::detect::MAX_BACKGROUND_SECONDS;
+    if !(args.seconds.is_finite() && (5.0..=longest).contains(&args.seconds)) {
+        anyhow::bail!(
+            "--seconds must be from 5 to {longest}, found {}",
+            args.seconds
+        );
     }
     let config = match &args.config {
         Some(path) => Config::load(path)?,

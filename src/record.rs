@@ -592,6 +592,14 @@ fn record_background(
         Some(path) => {
             let mut source = crate::audio::WavSource::open(path, options.channel)?;
             let rate = source.sample_rate();
+            let longest = crate::detect::MAX_BACKGROUND_SECONDS;
+            let length = source.frames_total() as f64 / f64::from(rate.max(1));
+            if length > longest {
+                bail!(
+                    "'{}' is {length:.0} s long; a background recording is at most {longest:.0} s (a minute of talking is plenty): cut it",
+                    path.display()
+                );
+            }
             (source.read_all()?, rate)
         }
         None => record_talking(options, seconds, err)?,

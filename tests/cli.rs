@@ -430,6 +430,10 @@ fn mistakes_exit_non_zero_with_a_message_and_print_nothing_on_stdout() {
             &["check", "--config", "config/missing.toml"],
             "cannot read config 'config/missing.toml'",
         ),
+        (
+            &["record", "talking", "--background", "--seconds", "400"],
+            "--seconds must be from 5 to 300, found 400",
+        ),
     ];
     assert_each_fails_with(cases);
 }

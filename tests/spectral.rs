@@ -901,3 +901,38 @@ fn a_sound_in_the_background_recording_no_longer_fires_and_the_pattern_still_doe
     let (with, why) = fired(&with_talking);
     assert_eq!(with, [false, true, false, true], "with it: {why}");
 }
+
+/// A background recording longer than `MAX_BACKGROUND_SECONDS` is refused by name
+/// before it is read (it would be read whole and pooled while the detector is built).
+#[test]
+fn a_background_recording_longer_than_five_minutes_is_refused_by_name() {
+    let dir = temp_dir("background-long");
+    let long = dir.join("all-day.wav");
+    let rate = 8_000;
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: rate,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(&long, spec).unwrap();
+    let seconds = onomato::detect::MAX_BACKGROUND_SECONDS + 1.0;
+    for _ in 0..samples_for(seconds, rate) {
+        w.write_sample(0i16).unwrap();
+    }
+    w.finalize().unwrap();
+    let settings = DetectorSettings {
+        background: vec![long.clone()],
+        ..spectral()
+    };
+    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
+    let err = Detector::new(vec![impulse("pew", take, &settings)], &settings, RATE)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains(&long.display().to_string())
+            && err.contains("301 s long; expected at most 300 s"),
+        "{err}"
+    );
+}

@@ -163,7 +163,14 @@ pub enum DetectError {
     BackgroundAudio(AudioError),
     #[error("background recording '{}' has no sound that stands out of its quiet; expected a recording of what must never fire (you talking, the room), at least a few seconds of it", .0.display())]
     EmptyBackground(PathBuf),
+    #[error("background recording '{}' is {seconds:.0} s long; expected at most {MAX_BACKGROUND_SECONDS:.0} s (a minute of talking is plenty): cut it", path.display())]
+    LongBackground { path: PathBuf, seconds: f64 },
 }
+
+/// The longest background recording read: it is read whole and pooled while the
+/// detector is built (a minute takes about 60 ms), and a minute of a voice's talking
+/// already covers its syllables (`docs/background.md`).
+pub const MAX_BACKGROUND_SECONDS: f64 = 300.0;
 
 /// The background recordings of `settings` (spectral method), each pooled as a matcher
 /// with `settings` pools onsets ([`spectral::background_model`]), with its path. An
@@ -180,6 +187,13 @@ pub fn own_background(
         .map(|path| {
             let mut source = WavSource::open(path, select).map_err(DetectError::BackgroundAudio)?;
             let rate = source.sample_rate();
+            let seconds = source.frames_total() as f64 / f64::from(rate.max(1));
+            if seconds > MAX_BACKGROUND_SECONDS {
+                return Err(DetectError::LongBackground {
+                    path: path.clone(),
+                    seconds,
+                });
+            }
             let samples = source.read_all().map_err(DetectError::BackgroundAudio)?;
             let samples = resample_clip(&samples, rate, settings.sample_rate)
                 .map_err(DetectError::BackgroundAudio)?;
