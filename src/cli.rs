@@ -44,7 +44,8 @@ pub enum Command {
     /// List audio inputs and MIDI output ports.
     Devices,
     /// Enrol a pattern: record takes of it (from the microphone, or a file), cut each to
-    /// the sound, save them beside the config and add the pattern to the config.
+    /// the sound, save them beside the config and add the pattern to the config. With
+    /// --background: record what must never fire (you talking) instead.
     Record(RecordArgs),
     /// Draw an animation whose timing is a recording's (a ball bouncing on every hit,
     /// rain, darts, a laser duel, or a timeline of the events), as an MP4 video with the
