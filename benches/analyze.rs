@@ -141,8 +141,8 @@ fn bench_spectral(c: &mut Criterion) {
     });
     // The same with a minute of background recording (`background`), which is read and
     // pooled while the detector is built; and 15 s detected against it.
-    let talking = std::env::temp_dir().join(format!("onomato-bench-{}.wav", std::process::id()));
-    write_mono_wav(&talking, &rec60);
+    let talking = temp_dir("bench-background").join("talking.wav");
+    write_wav_f32(&talking, &rec60, RATE);
     let with_background = DetectorSettings {
         background: vec![talking.clone()],
         ..settings.clone()
@@ -157,22 +157,6 @@ fn bench_spectral(c: &mut Criterion) {
         })
     });
     group.finish();
-    let _ = std::fs::remove_file(&talking);
-}
-
-/// Writes `samples` (at `RATE`) as a mono 32-bit float WAV.
-fn write_mono_wav(path: &std::path::Path, samples: &[f32]) {
-    let spec = hound::WavSpec {
-        channels: 1,
-        sample_rate: RATE,
-        bits_per_sample: 32,
-        sample_format: hound::SampleFormat::Float,
-    };
-    let mut w = hound::WavWriter::create(path, spec).expect("create the bench's WAV");
-    for &x in samples {
-        w.write_sample(x).expect("write the bench's WAV");
-    }
-    w.finalize().expect("finish the bench's WAV");
 }
 
 /// One pattern of growing length: the direct cost grows with the length, the FFT cost
