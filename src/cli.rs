@@ -597,7 +597,7 @@ fn run_record(args: &RecordArgs) -> anyhow::Result<()> {
         config: args.config.clone(),
         dir: args.dir.clone(),
         input: args.input.clone(),
-        max_seconds: config.detector.max_pattern_seconds,
+        detector: config.detector.clone(),
         input_settings,
         background_seconds: args.background.then_some(args.seconds),
     };

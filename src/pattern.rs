@@ -283,7 +283,13 @@ pub fn look_alike_patterns(
     if settings.method != Method::Spectral || patterns.len() < 2 {
         return Ok(Vec::new());
     }
-    let detector = crate::Detector::new(patterns, settings, settings.sample_rate)?;
+    // How alike the takes are does not depend on the background recordings: they are
+    // not read and pooled again here.
+    let takes_only = DetectorSettings {
+        background: Vec::new(),
+        ..settings.clone()
+    };
+    let detector = crate::Detector::new(patterns, &takes_only, settings.sample_rate)?;
     Ok(detector
         .look_alike_patterns(LOOK_ALIKE_SIMILARITY)
         .into_iter()

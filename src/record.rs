@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use rtrb::Consumer;
 
 use crate::audio::ChannelSelect;
-use crate::config::{Config, InputSettings, PatternKind};
+use crate::config::{Config, DetectorSettings, InputSettings, PatternKind};
 use crate::input;
 use crate::status::Status;
 
@@ -261,7 +261,9 @@ pub struct RecordOptions {
     pub dir: PathBuf,
     /// Takes from this file instead of the microphone.
     pub input: Option<PathBuf>,
-    pub max_seconds: f64,
+    /// The config's detector settings: the longest take (`max_pattern_seconds`), and
+    /// how a background recording is pooled.
+    pub detector: DetectorSettings,
     pub input_settings: InputSettings,
     /// Records a background recording of this many seconds (from the microphone; the
     /// whole of `input` otherwise) instead of a pattern's takes.
@@ -310,7 +312,7 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
             let mut source = crate::audio::WavSource::open(path, options.channel)?;
             let rate = source.sample_rate();
             let samples = source.read_all()?;
-            for found in find_takes(&samples, rate, options.max_seconds) {
+            for found in find_takes(&samples, rate, options.detector.max_pattern_seconds) {
                 let (a, b) = (found.span.start, found.span.end);
                 let at = |n: usize| n as f64 / f64::from(rate);
                 match found.verdict {
@@ -429,7 +431,7 @@ fn record_from_microphone(
     let channels = usize::from(capture.channels).max(1);
     let mut good = Vec::new();
     let mut attempts = 0;
-    let window = options.max_seconds + 1.5;
+    let window = options.detector.max_pattern_seconds + 1.5;
     while good.len() < options.takes && attempts < options.takes * 3 {
         attempts += 1;
         let what = format!("take {} of {}", good.len() + 1, options.takes);
@@ -458,7 +460,7 @@ fn record_from_microphone(
             }
         }
         let _ = writeln!(err);
-        let found = find_takes(&mono, rate, options.max_seconds);
+        let found = find_takes(&mono, rate, options.detector.max_pattern_seconds);
         match found.first() {
             None => {
                 let _ = writeln!(
@@ -578,10 +580,7 @@ fn record_background(
     err: &mut dyn Write,
 ) -> anyhow::Result<PathBuf> {
     use anyhow::{bail, Context};
-    let detector = match &options.config {
-        Some(path) => Config::load(path)?.detector,
-        None => crate::config::DetectorSettings::default(),
-    };
+    let detector = &options.detector;
     if detector.method != crate::config::Method::Spectral {
         bail!(
             "a background recording is for the spectral method; the config's method is \"{}\"",
@@ -589,23 +588,11 @@ fn record_background(
         );
     }
     let (samples, rate) = match &options.input {
-        Some(path) => {
-            let mut source = crate::audio::WavSource::open(path, options.channel)?;
-            let rate = source.sample_rate();
-            let longest = crate::detect::MAX_BACKGROUND_SECONDS;
-            let length = source.frames_total() as f64 / f64::from(rate.max(1));
-            if length > longest {
-                bail!(
-                    "'{}' is {length:.0} s long; a background recording is at most {longest:.0} s (a minute of talking is plenty): cut it",
-                    path.display()
-                );
-            }
-            (source.read_all()?, rate)
-        }
+        Some(path) => crate::detect::read_background(path, options.channel)?,
         None => record_talking(options, seconds, err)?,
     };
     let at_rate = crate::audio::resample_clip(&samples, rate, detector.sample_rate)?;
-    let sounds = crate::detect::spectral::background_model(&at_rate, &detector).len();
+    let sounds = crate::detect::spectral::background_model(&at_rate, detector).len();
     if sounds == 0 {
         bail!(
             "nothing in the recording stands out of its quiet ({:.1} s): talk as you do between hits, closer to the microphone",

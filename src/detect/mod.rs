@@ -22,7 +22,7 @@ mod place;
 pub mod spectral;
 pub mod waveform;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use serde::{Serialize, Serializer};
@@ -172,6 +172,23 @@ pub enum DetectError {
 /// already covers its syllables (`docs/background.md`).
 pub const MAX_BACKGROUND_SECONDS: f64 = 300.0;
 
+/// The samples (channel `select`, or the mix) and sample rate of the background
+/// recording `path`; one longer than [`MAX_BACKGROUND_SECONDS`] is refused before it is
+/// read.
+pub fn read_background(path: &Path, select: ChannelSelect) -> Result<(Vec<f32>, u32), DetectError> {
+    let mut source = WavSource::open(path, select).map_err(DetectError::BackgroundAudio)?;
+    let rate = source.sample_rate();
+    let seconds = source.frames_total() as f64 / f64::from(rate.max(1));
+    if seconds > MAX_BACKGROUND_SECONDS {
+        return Err(DetectError::LongBackground {
+            path: path.to_path_buf(),
+            seconds,
+        });
+    }
+    let samples = source.read_all().map_err(DetectError::BackgroundAudio)?;
+    Ok((samples, rate))
+}
+
 /// The background recordings of `settings` (spectral method), each pooled as a matcher
 /// with `settings` pools onsets ([`spectral::background_model`]), with its path. An
 /// error names the file.
@@ -185,16 +202,7 @@ pub fn own_background(
         .background
         .iter()
         .map(|path| {
-            let mut source = WavSource::open(path, select).map_err(DetectError::BackgroundAudio)?;
-            let rate = source.sample_rate();
-            let seconds = source.frames_total() as f64 / f64::from(rate.max(1));
-            if seconds > MAX_BACKGROUND_SECONDS {
-                return Err(DetectError::LongBackground {
-                    path: path.clone(),
-                    seconds,
-                });
-            }
-            let samples = source.read_all().map_err(DetectError::BackgroundAudio)?;
+            let (samples, rate) = read_background(path, select)?;
             let samples = resample_clip(&samples, rate, settings.sample_rate)
                 .map_err(DetectError::BackgroundAudio)?;
             let model = spectral::background_model(&samples, settings);
