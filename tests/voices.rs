@@ -579,3 +579,46 @@ fn pop_and_pew_which_share_their_first_25_ms_are_told_apart() {
     );
     said_alone_are_found(&dir, &patterns, &settings, &["pop", "pew"], 9, "140");
 }
+
+/// A held sound that the speech guard stopped (it follows other talking) is still the
+/// pattern's sound for as long as it goes on, not only for its take's length: a "hooo"
+/// said three times as long as enrolled, after a word that is none of the patterns, must
+/// not keep the guard closed over the "tick" said 0.25 s after it.
+#[test]
+fn a_word_after_a_long_held_sound_the_guard_stopped_is_found() {
+    let dir = temp_dir("after-stopped-held");
+    let settings = spectral();
+    let patterns = enrolled_words(&dir, &settings);
+    let talking = word(&dir, "talking", "seven", "175");
+    word(&dir, "long-hooo-take", "hoooooo", "175");
+    let long = dir.join("long-hooo.wav");
+    #[rustfmt::skip]
+    run("sox", &[dir.join("long-hooo-take.wav").to_str().unwrap(), long.to_str().unwrap(), "tempo", "0.33"]);
+    let hooo = read(&long);
+    let tick = word(&dir, "tick-after", "tick", "175");
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    rec.extend(&talking);
+    rec.extend(vec![0.0; samples_for(0.05, RATE)]);
+    let hooo_onset = rec.len() as f64 / f64::from(RATE);
+    rec.extend(&hooo);
+    rec.extend(vec![0.0; samples_for(0.25, RATE)]);
+    let onset = rec.len() as f64 / f64::from(RATE);
+    rec.extend(&tick);
+    rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+    add_noise(&mut rec, 0.0005, 29);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert!(
+        events
+            .iter()
+            .any(|e| &*e.pattern == "tick" && (e.time - onset).abs() <= 0.05),
+        "tick at {onset:.3} (hooo from {hooo_onset:.3}, {:.2} s): {:?}\n{}",
+        hooo.len() as f64 / f64::from(RATE),
+        events
+            .iter()
+            .map(|e| format!("{} {:.3}", e.pattern, e.time))
+            .collect::<Vec<_>>(),
+        explained(&mut det)
+    );
+}

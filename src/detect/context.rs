@@ -8,8 +8,9 @@
 //! goes on and then while it dies away, until a new sound rises out of it
 //! ([`Context::follow`]); a held sound covers up to its end, then its sound dying away
 //! the same way for as long as the guard looks back; a pattern's sound
-//! that only the guard stopped covers its take's length too, so the guard never feeds on
-//! its own decisions: only sounds that are none of the patterns keep it closed. It
+//! that only the guard stopped covers its take's length too (a held one, up to the end
+//! the held stage finds for it, then as it dies away), so the guard never feeds on its
+//! own decisions: only sounds that are none of the patterns keep it closed. It
 //! judges only the frames of the guard's span before an onset, so it opens within that
 //! span of the last unrecognised sound, whatever follows.
 //!
@@ -160,6 +161,42 @@ impl Context {
         });
     }
 
+    /// A held sound that only the guard stopped covers from sample `from` until the
+    /// held stage says it ended ([`Context::end_stopped_held`]); returns its slot.
+    pub(super) fn stopped_held_began(&mut self, from: u64) -> usize {
+        self.growing = None;
+        self.push(Span {
+            from,
+            to: u64::MAX,
+            fired: false,
+        })
+    }
+
+    /// The stopped held sound of [`Context::stopped_held_began`] (its `slot` and first
+    /// sample `from`) ended at sample `end`, the newest frame at `level_db`: it covers
+    /// its sound as it dies away too, up to sample `limit`, as a held sound that fired
+    /// does. A span forgotten since (newer spans took its slot) is left alone.
+    pub(super) fn end_stopped_held(
+        &mut self,
+        slot: usize,
+        from: u64,
+        end: u64,
+        level_db: f32,
+        limit: u64,
+    ) {
+        let span = &mut self.spans[slot];
+        if span.from != from || span.to != u64::MAX {
+            return;
+        }
+        span.to = end;
+        self.growing = Some(Growing {
+            slot,
+            peak_db: level_db,
+            lowest_db: Some(level_db),
+            limit,
+        });
+    }
+
     /// A held sound that fired covers from sample `from` until it ends
     /// ([`Context::end_held`]).
     pub(super) fn held_began(&mut self, from: u64) {
@@ -294,6 +331,29 @@ mod tests {
             assert_eq!(c.fired_at(100), fired);
             assert!(c.recognised_at(100) && !c.recognised_at(150));
         }
+    }
+
+    #[test]
+    fn a_held_sound_the_guard_stopped_covers_until_it_ends_then_as_it_dies_away() {
+        let mut c = context();
+        let slot = c.stopped_held_began(50);
+        assert!(c.recognised_at(50) && c.recognised_at(5000) && !c.fired_at(100));
+        c.end_stopped_held(slot, 50, 900, -20.0, 2000);
+        assert!(c.recognised_at(900) && !c.recognised_at(901));
+        // Its sound dying away is still its own, until a new sound rises 10 dB.
+        for centre in 901..1000 {
+            c.follow(centre, centre, -40.0);
+        }
+        c.follow(1000, 1000, -29.0);
+        assert!(c.recognised_at(999) && !c.recognised_at(1000));
+        // A span whose slot newer spans took is left alone.
+        let mut c = context();
+        let slot = c.stopped_held_began(50);
+        for k in 0..SPANS as u64 {
+            c.stopped(100 + 10 * k, 105 + 10 * k);
+        }
+        c.end_stopped_held(slot, 50, 900, -20.0, 2000);
+        assert!(!c.recognised_at(900) && !c.recognised_at(60));
     }
 
     #[test]

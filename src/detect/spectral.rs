@@ -267,6 +267,10 @@ pub struct SpectralMatcher {
     /// Placed onsets that found `pending` full.
     pending_dropped: u64,
     held: HeldStage,
+    /// A held sound the guard stopped, followed only to know how long it covers
+    /// (`SpectralMatcher::follow_stopped_held`), and its span in the context stage.
+    stopped_held: HeldStage,
+    stopped_held_span: Option<(usize, u64)>,
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
@@ -542,6 +546,8 @@ impl SpectralMatcher {
             pending: Vec::with_capacity(16),
             pending_dropped: 0,
             held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
+            stopped_held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
+            stopped_held_span: None,
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
@@ -709,6 +715,7 @@ impl SpectralMatcher {
         if let Some(h) = self.held.end() {
             self.close_held(h, out);
         }
+        self.end_stopped_held();
         if self.dropped_onsets() > 0 {
             tracing::warn!(
                 dropped = self.dropped_onsets(),
@@ -781,6 +788,7 @@ impl SpectralMatcher {
         }
         self.decide_pending(out);
         self.follow_held(f, out);
+        self.follow_stopped_held(f);
     }
 
     fn decide_pending(&mut self, out: &mut Vec<Event>) {
@@ -928,10 +936,22 @@ impl SpectralMatcher {
             && !evidence.below_threshold()
             && !evidence.like_speech(&self.gates)
         {
-            self.context.stopped(
-                covered_from,
-                time_sample + self.templates[best_template].length_after_onset,
-            );
+            if self.patterns[pi].kind == PatternKind::Continuous {
+                // A held sound covers as long as the held stage hears it go on.
+                self.end_stopped_held();
+                let loudest = (onset_frame..self.frame_count)
+                    .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
+                    .fold(f32::NEG_INFINITY, f32::max);
+                let slot = self.context.stopped_held_began(covered_from);
+                self.stopped_held_span = Some((slot, covered_from));
+                self.stopped_held
+                    .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
+            } else {
+                self.context.stopped(
+                    covered_from,
+                    time_sample + self.templates[best_template].length_after_onset,
+                );
+            }
         }
         if outcome != Outcome::Fired {
             return None;
@@ -954,8 +974,9 @@ impl SpectralMatcher {
         };
         let kind = info.kind;
         if kind == PatternKind::Continuous {
-            // A held sound it replaces ends first, so that its end does not close the
-            // new one's span.
+            // A held sound it replaces ends first (a stopped one that was followed as
+            // well), so that its end does not close the new one's span.
+            self.end_stopped_held();
             let loudest = (onset_frame..self.frame_count)
                 .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
                 .fold(f32::NEG_INFINITY, f32::max);
@@ -1312,6 +1333,57 @@ impl SpectralMatcher {
         self.context.follows_unrecognised_sound(frames, peak)
     }
 
+    /// Feeds frame `f` to the stage that follows a held sound the guard stopped; its
+    /// span ends where the sound does.
+    fn follow_stopped_held(&mut self, f: u64) {
+        let Some(pattern) = self.stopped_held.current().map(|h| h.pattern) else {
+            return;
+        };
+        let slot = (f % self.frame_capacity as u64) as usize;
+        let info = &self.patterns[pattern];
+        let ended = self.stopped_held.follow(
+            f,
+            &self.frames[slot * BANDS..(slot + 1) * BANDS],
+            self.levels[slot],
+            &info.sustain,
+            info.continuous_threshold,
+        );
+        if let Some(h) = ended {
+            self.close_stopped_held(h);
+        }
+    }
+
+    /// Ends the held sound the guard stopped, if one is going on.
+    fn end_stopped_held(&mut self) {
+        if let Some(h) = self.stopped_held.end() {
+            self.close_stopped_held(h);
+        }
+    }
+
+    fn close_stopped_held(&mut self, h: Held) {
+        let Some((slot, from)) = self.stopped_held_span.take() else {
+            return;
+        };
+        let end_sample = self.held_end_sample(&h);
+        let newest =
+            self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
+        self.context.end_stopped_held(
+            slot,
+            from,
+            end_sample,
+            newest,
+            end_sample + self.guard_samples(),
+        );
+    }
+
+    /// Where a held sound ends: at the end of its last matching frame's centre hop.
+    fn held_end_sample(&self, h: &Held) -> u64 {
+        (self.frame_start(h.last_good_frame())
+            + self.analyzer.win as i64 / 2
+            + self.hop() as i64 / 2)
+            .max(h.begin_sample as i64 + 1) as u64
+    }
+
     /// Feeds frame `f` to the held stage; turns the held sound it ends into an event.
     fn follow_held(&mut self, f: u64, out: &mut Vec<Event>) {
         let Some(pattern) = self.held.current().map(|h| h.pattern) else {
@@ -1332,11 +1404,7 @@ impl SpectralMatcher {
     }
 
     fn close_held(&mut self, h: Held, out: &mut Vec<Event>) {
-        // The sound ends at the end of the last matching frame's centre hop.
-        let end_sample = (self.frame_start(h.last_good_frame())
-            + self.analyzer.win as i64 / 2
-            + self.hop() as i64 / 2)
-            .max(h.begin_sample as i64 + 1) as u64;
+        let end_sample = self.held_end_sample(&h);
         // Its sound dying away is still its own, for as long as the guard looks back.
         let newest =
             self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
