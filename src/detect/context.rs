@@ -161,21 +161,11 @@ impl Context {
         });
     }
 
-    /// A held sound that only the guard stopped covers from sample `from` until the
-    /// held stage says it ended ([`Context::end_stopped_held`]); returns its slot.
-    pub(super) fn stopped_held_began(&mut self, from: u64) -> usize {
-        self.growing = None;
-        self.push(Span {
-            from,
-            to: u64::MAX,
-            fired: false,
-        })
-    }
-
-    /// The stopped held sound of [`Context::stopped_held_began`] (its `slot` and first
-    /// sample `from`) ended at sample `end`, the newest frame at `level_db`: it covers
-    /// its sound as it dies away too, up to sample `limit`, as a held sound that fired
-    /// does. A span forgotten since (newer spans took its slot) is left alone.
+    /// The held sound of [`Context::held_began`] whose span is in `slot`, from sample
+    /// `from`, and that only the guard stopped, ended at sample `end`, the newest frame
+    /// at `level_db`: it covers its sound as it dies away too, up to sample `limit`, as a
+    /// held sound that fired does ([`Context::end_held`]). A span forgotten since (newer
+    /// spans took its slot) is left alone.
     pub(super) fn end_stopped_held(
         &mut self,
         slot: usize,
@@ -184,28 +174,22 @@ impl Context {
         level_db: f32,
         limit: u64,
     ) {
-        let span = &mut self.spans[slot];
-        if span.from != from || span.to != u64::MAX {
-            return;
+        let span = self.spans[slot];
+        if span.from == from && span.to == u64::MAX {
+            self.end_span(slot, end, level_db, limit);
         }
-        span.to = end;
-        self.growing = Some(Growing {
-            slot,
-            peak_db: level_db,
-            lowest_db: Some(level_db),
-            limit,
-        });
     }
 
-    /// A held sound that fired covers from sample `from` until it ends
-    /// ([`Context::end_held`]).
-    pub(super) fn held_began(&mut self, from: u64) {
+    /// A held sound covers from sample `from` until it ends ([`Context::end_held`] for
+    /// one that fired, [`Context::end_stopped_held`] for one that only the guard
+    /// stopped); returns its span's slot.
+    pub(super) fn held_began(&mut self, from: u64) -> usize {
+        self.growing = None;
         self.push(Span {
             from,
             to: u64::MAX,
             fired: false,
-        });
-        self.growing = None;
+        })
     }
 
     fn push(&mut self, span: Span) -> usize {
@@ -246,17 +230,24 @@ impl Context {
     /// still open ends there, then covers the sound as it dies away (as an impulse's
     /// does, [`Context::follow`]) up to sample `limit`.
     pub(super) fn end_held(&mut self, end: u64, level_db: f32, limit: u64) {
-        for (slot, span) in self.spans.iter_mut().enumerate() {
+        for slot in 0..SPANS {
+            let span = self.spans[slot];
             if span.to == u64::MAX && span.from != u64::MAX {
-                span.to = end;
-                self.growing = Some(Growing {
-                    slot,
-                    peak_db: level_db,
-                    lowest_db: Some(level_db),
-                    limit,
-                });
+                self.end_span(slot, end, level_db, limit);
             }
         }
+    }
+
+    /// The open span in `slot` ends at sample `end`, then grows over its sound dying
+    /// away from `level_db` ([`Context::follow`]) up to sample `limit`.
+    fn end_span(&mut self, slot: usize, end: u64, level_db: f32, limit: u64) {
+        self.spans[slot].to = end;
+        self.growing = Some(Growing {
+            slot,
+            peak_db: level_db,
+            lowest_db: Some(level_db),
+            limit,
+        });
     }
 
     /// Whether an impulse that fired holds sample `n`.
@@ -336,7 +327,7 @@ mod tests {
     #[test]
     fn a_held_sound_the_guard_stopped_covers_until_it_ends_then_as_it_dies_away() {
         let mut c = context();
-        let slot = c.stopped_held_began(50);
+        let slot = c.held_began(50);
         assert!(c.recognised_at(50) && c.recognised_at(5000) && !c.fired_at(100));
         c.end_stopped_held(slot, 50, 900, -20.0, 2000);
         assert!(c.recognised_at(900) && !c.recognised_at(901));
@@ -348,7 +339,7 @@ mod tests {
         assert!(c.recognised_at(999) && !c.recognised_at(1000));
         // A span whose slot newer spans took is left alone.
         let mut c = context();
-        let slot = c.stopped_held_began(50);
+        let slot = c.held_began(50);
         for k in 0..SPANS as u64 {
             c.stopped(100 + 10 * k, 105 + 10 * k);
         }

@@ -225,6 +225,14 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
     BackgroundModel::new(FEATURES, matcher.decision_frames, templates)
 }
 
+/// Which of the matcher's held stages: the one whose sounds fired, or the one that
+/// follows a held sound the speech guard stopped.
+#[derive(Clone, Copy)]
+enum Stage {
+    Fired,
+    Stopped,
+}
+
 /// Where stream sample `n` lies in the sample ring. The ring is a power of two long:
 /// a mask, not a division, per sample.
 fn ring_slot(ring: &[f32], n: u64) -> usize {
@@ -939,10 +947,8 @@ impl SpectralMatcher {
             if self.patterns[pi].kind == PatternKind::Continuous {
                 // A held sound covers as long as the held stage hears it go on.
                 self.end_stopped_held();
-                let loudest = (onset_frame..self.frame_count)
-                    .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
-                    .fold(f32::NEG_INFINITY, f32::max);
-                let slot = self.context.stopped_held_began(covered_from);
+                let loudest = self.loudest_since(onset_frame);
+                let slot = self.context.held_began(covered_from);
                 self.stopped_held_span = Some((slot, covered_from));
                 self.stopped_held
                     .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
@@ -977,9 +983,7 @@ impl SpectralMatcher {
             // A held sound it replaces ends first (a stopped one that was followed as
             // well), so that its end does not close the new one's span.
             self.end_stopped_held();
-            let loudest = (onset_frame..self.frame_count)
-                .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
-                .fold(f32::NEG_INFINITY, f32::max);
+            let loudest = self.loudest_since(onset_frame);
             let newest = self.frame_count - 1;
             if let Some(h) = self
                 .held
@@ -1110,9 +1114,7 @@ impl SpectralMatcher {
     /// frames before are those whose whole window lies in the span.
     fn peak_and_before(&self, time_sample: u64, onset_frame: u64) -> (f32, f32) {
         let cap = self.frame_capacity as u64;
-        let peak = (onset_frame..self.frame_count)
-            .map(|f| self.levels[(f % cap) as usize])
-            .fold(f32::NEG_INFINITY, f32::max);
+        let peak = self.loudest_since(onset_frame);
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         let pre = self
             .frames_inside(quiet_from, quiet_to)
@@ -1336,21 +1338,26 @@ impl SpectralMatcher {
     /// Feeds frame `f` to the stage that follows a held sound the guard stopped; its
     /// span ends where the sound does.
     fn follow_stopped_held(&mut self, f: u64) {
-        let Some(pattern) = self.stopped_held.current().map(|h| h.pattern) else {
-            return;
+        if let Some(h) = self.follow_stage(Stage::Stopped, f) {
+            self.close_stopped_held(h);
+        }
+    }
+
+    /// Feeds frame `f` to one of the two held stages; the sound it ends, if any.
+    fn follow_stage(&mut self, stage: Stage, f: u64) -> Option<Held> {
+        let held = match stage {
+            Stage::Fired => &mut self.held,
+            Stage::Stopped => &mut self.stopped_held,
         };
+        let info = &self.patterns[held.current()?.pattern];
         let slot = (f % self.frame_capacity as u64) as usize;
-        let info = &self.patterns[pattern];
-        let ended = self.stopped_held.follow(
+        held.follow(
             f,
             &self.frames[slot * BANDS..(slot + 1) * BANDS],
             self.levels[slot],
             &info.sustain,
             info.continuous_threshold,
-        );
-        if let Some(h) = ended {
-            self.close_stopped_held(h);
-        }
+        )
     }
 
     /// Ends the held sound the guard stopped, if one is going on.
@@ -1365,8 +1372,7 @@ impl SpectralMatcher {
             return;
         };
         let end_sample = self.held_end_sample(&h);
-        let newest =
-            self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
+        let newest = self.newest_level();
         self.context.end_stopped_held(
             slot,
             from,
@@ -1374,6 +1380,18 @@ impl SpectralMatcher {
             newest,
             end_sample + self.guard_samples(),
         );
+    }
+
+    /// The loudest level (dB of sound) of the frames from `first` to the newest.
+    fn loudest_since(&self, first: u64) -> f32 {
+        (first..self.frame_count)
+            .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
+            .fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    /// The newest frame's level (dB of sound).
+    fn newest_level(&self) -> f32 {
+        self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize]
     }
 
     /// Where a held sound ends: at the end of its last matching frame's centre hop.
@@ -1386,19 +1404,7 @@ impl SpectralMatcher {
 
     /// Feeds frame `f` to the held stage; turns the held sound it ends into an event.
     fn follow_held(&mut self, f: u64, out: &mut Vec<Event>) {
-        let Some(pattern) = self.held.current().map(|h| h.pattern) else {
-            return;
-        };
-        let slot = (f % self.frame_capacity as u64) as usize;
-        let info = &self.patterns[pattern];
-        let ended = self.held.follow(
-            f,
-            &self.frames[slot * BANDS..(slot + 1) * BANDS],
-            self.levels[slot],
-            &info.sustain,
-            info.continuous_threshold,
-        );
-        if let Some(h) = ended {
+        if let Some(h) = self.follow_stage(Stage::Fired, f) {
             self.close_held(h, out);
         }
     }
@@ -1406,8 +1412,7 @@ impl SpectralMatcher {
     fn close_held(&mut self, h: Held, out: &mut Vec<Event>) {
         let end_sample = self.held_end_sample(&h);
         // Its sound dying away is still its own, for as long as the guard looks back.
-        let newest =
-            self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize];
+        let newest = self.newest_level();
         self.context
             .end_held(end_sample, newest, end_sample + self.guard_samples());
         let lo = h
