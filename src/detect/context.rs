@@ -162,27 +162,27 @@ impl Context {
     }
 
     /// The held sound of [`Context::held_began`] whose span is in `slot`, from sample
-    /// `from`, and that only the guard stopped, ended at sample `end`, the newest frame
-    /// at `level_db`: it covers its sound as it dies away too, up to sample `limit`, as a
-    /// held sound that fired does ([`Context::end_held`]). A span forgotten since (newer
-    /// spans took its slot) is left alone.
-    pub(super) fn end_stopped_held(
-        &mut self,
-        slot: usize,
-        from: u64,
-        end: u64,
-        level_db: f32,
-        limit: u64,
-    ) {
+    /// `from`, ended at sample `end`, the newest frame at `level_db`: its span ends
+    /// there, then covers the sound as it dies away (as an impulse's does,
+    /// [`Context::follow`]) up to sample `limit`. Each held sound ends its own span: one
+    /// the guard stopped, followed while a held sound that fired goes on, outlasts it
+    /// or not by its own sound. A span forgotten since (newer spans took its slot) is
+    /// left alone.
+    pub(super) fn end_held(&mut self, slot: usize, from: u64, end: u64, level_db: f32, limit: u64) {
         let span = self.spans[slot];
         if span.from == from && span.to == u64::MAX {
-            self.end_span(slot, end, level_db, limit);
+            self.spans[slot].to = end;
+            self.growing = Some(Growing {
+                slot,
+                peak_db: level_db,
+                lowest_db: Some(level_db),
+                limit,
+            });
         }
     }
 
-    /// A held sound covers from sample `from` until it ends ([`Context::end_held`] for
-    /// one that fired, [`Context::end_stopped_held`] for one that only the guard
-    /// stopped); returns its span's slot.
+    /// A held sound (one that fired, or one that only the guard stopped) covers from
+    /// sample `from` until it ends ([`Context::end_held`]); returns its span's slot.
     pub(super) fn held_began(&mut self, from: u64) -> usize {
         self.growing = None;
         self.push(Span {
@@ -224,30 +224,6 @@ impl Context {
         let span = &mut self.spans[g.slot];
         span.to = span.to.max(end);
         self.growing = Some(g);
-    }
-
-    /// A held sound ended at sample `end`, the newest frame at `level_db`: the span
-    /// still open ends there, then covers the sound as it dies away (as an impulse's
-    /// does, [`Context::follow`]) up to sample `limit`.
-    pub(super) fn end_held(&mut self, end: u64, level_db: f32, limit: u64) {
-        for slot in 0..SPANS {
-            let span = self.spans[slot];
-            if span.to == u64::MAX && span.from != u64::MAX {
-                self.end_span(slot, end, level_db, limit);
-            }
-        }
-    }
-
-    /// The open span in `slot` ends at sample `end`, then grows over its sound dying
-    /// away from `level_db` ([`Context::follow`]) up to sample `limit`.
-    fn end_span(&mut self, slot: usize, end: u64, level_db: f32, limit: u64) {
-        self.spans[slot].to = end;
-        self.growing = Some(Growing {
-            slot,
-            peak_db: level_db,
-            lowest_db: Some(level_db),
-            limit,
-        });
     }
 
     /// Whether an impulse that fired holds sample `n`.
@@ -329,7 +305,7 @@ mod tests {
         let mut c = context();
         let slot = c.held_began(50);
         assert!(c.recognised_at(50) && c.recognised_at(5000) && !c.fired_at(100));
-        c.end_stopped_held(slot, 50, 900, -20.0, 2000);
+        c.end_held(slot, 50, 900, -20.0, 2000);
         assert!(c.recognised_at(900) && !c.recognised_at(901));
         // Its sound dying away is still its own, until a new sound rises 10 dB.
         for centre in 901..1000 {
@@ -343,8 +319,31 @@ mod tests {
         for k in 0..SPANS as u64 {
             c.stopped(100 + 10 * k, 105 + 10 * k);
         }
-        c.end_stopped_held(slot, 50, 900, -20.0, 2000);
+        c.end_held(slot, 50, 900, -20.0, 2000);
         assert!(!c.recognised_at(900) && !c.recognised_at(60));
+    }
+
+    #[test]
+    fn each_held_sound_ends_its_own_span() {
+        // A held sound that fired, and one the guard stopped while it went on.
+        let mut c = context();
+        let fired = c.held_began(0);
+        let stopped = c.held_began(300);
+        c.end_held(fired, 0, 500, -60.0, 500);
+        assert!(
+            c.recognised_at(5000),
+            "the stopped held sound goes on after the fired one ends"
+        );
+        c.end_held(stopped, 300, 900, -60.0, 900);
+        assert!(c.recognised_at(900) && !c.recognised_at(901));
+        // Ended in the other order, each span keeps its own end.
+        let mut c = context();
+        let fired = c.held_began(0);
+        let stopped = c.held_began(300);
+        c.end_held(stopped, 300, 400, -60.0, 400);
+        assert!(c.recognised_at(5000), "the fired held sound goes on");
+        c.end_held(fired, 0, 900, -60.0, 900);
+        assert!(c.recognised_at(900) && !c.recognised_at(901));
     }
 
     #[test]
@@ -398,8 +397,8 @@ mod tests {
     #[test]
     fn a_held_sound_covers_its_sound_dying_away_after_its_end_up_to_a_limit() {
         let mut c = context();
-        c.held_began(0);
-        c.end_held(500, -30.0, 700);
+        let slot = c.held_began(0);
+        c.end_held(slot, 0, 500, -30.0, 700);
         for centre in 501..600 {
             c.follow(centre, centre, -30.0 - 0.2 * (centre - 500) as f32);
         }
@@ -410,8 +409,8 @@ mod tests {
             "a sound rising 10 dB out of the tail is new"
         );
         let mut c = context();
-        c.held_began(0);
-        c.end_held(500, -30.0, 700);
+        let slot = c.held_began(0);
+        c.end_held(slot, 0, 500, -30.0, 700);
         for centre in 501..800 {
             c.follow(centre, centre, -40.0);
         }
@@ -421,9 +420,9 @@ mod tests {
     #[test]
     fn a_held_sound_covers_until_it_ends_and_the_oldest_span_is_forgotten() {
         let mut c = context();
-        c.held_began(0);
+        let slot = c.held_began(0);
         assert!(c.recognised_at(1_000_000));
-        c.end_held(500, -60.0, 500);
+        c.end_held(slot, 0, 500, -60.0, 500);
         assert!(c.recognised_at(500) && !c.recognised_at(501));
         for k in 1..=SPANS as u64 {
             c.stopped(1000 * k, 1000 * k + 10);

@@ -275,6 +275,9 @@ pub struct SpectralMatcher {
     /// Placed onsets that found `pending` full.
     pending_dropped: u64,
     held: HeldStage,
+    /// The span in the context stage of the held sound `held` follows, and where it
+    /// began.
+    held_span: Option<(usize, u64)>,
     /// A held sound the guard stopped, followed only to know how long it covers
     /// (`SpectralMatcher::follow_stopped_held`), and its span in the context stage.
     stopped_held: HeldStage,
@@ -555,6 +558,7 @@ impl SpectralMatcher {
             pending_dropped: 0,
             held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
             stopped_held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
+            held_span: None,
             stopped_held_span: None,
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
@@ -991,7 +995,8 @@ impl SpectralMatcher {
             {
                 self.close_held(h, out);
             }
-            self.context.held_began(covered_from);
+            let slot = self.context.held_began(covered_from);
+            self.held_span = Some((slot, covered_from));
         } else {
             self.context.fired_impulse(
                 covered_from,
@@ -1368,18 +1373,19 @@ impl SpectralMatcher {
     }
 
     fn close_stopped_held(&mut self, h: Held) {
-        let Some((slot, from)) = self.stopped_held_span.take() else {
-            return;
-        };
-        let end_sample = self.held_end_sample(&h);
-        let newest = self.newest_level();
-        self.context.end_stopped_held(
-            slot,
-            from,
-            end_sample,
-            newest,
-            end_sample + self.guard_samples(),
-        );
+        let span = self.stopped_held_span.take();
+        self.end_held_span(span, self.held_end_sample(&h));
+    }
+
+    /// Ends the context stage's `span` (slot, and where it began) of a held sound that
+    /// ended at `end_sample`. Its sound dying away is still its own, for as long as the
+    /// guard looks back.
+    fn end_held_span(&mut self, span: Option<(usize, u64)>, end_sample: u64) {
+        if let Some((slot, from)) = span {
+            let newest = self.newest_level();
+            let limit = end_sample + self.guard_samples();
+            self.context.end_held(slot, from, end_sample, newest, limit);
+        }
     }
 
     /// The loudest level (dB of sound) of the frames from `first` to the newest.
@@ -1411,10 +1417,8 @@ impl SpectralMatcher {
 
     fn close_held(&mut self, h: Held, out: &mut Vec<Event>) {
         let end_sample = self.held_end_sample(&h);
-        // Its sound dying away is still its own, for as long as the guard looks back.
-        let newest = self.newest_level();
-        self.context
-            .end_held(end_sample, newest, end_sample + self.guard_samples());
+        let span = self.held_span.take();
+        self.end_held_span(span, end_sample);
         let lo = h
             .begin_sample
             .max(self.consumed.saturating_sub(self.samples.len() as u64));
