@@ -14,7 +14,8 @@
 //! so on. The levels they compare are the sound in a frame as the bands hear it (the
 //! rumble under them cut, [`LowCut`]), its power less twice the room's noise
 //! (`sound_level_db`), so that noise just under a sound neither hides it nor passes
-//! for speech around it.
+//! for speech around it; for the rise out of the quiet before, the noise of whole
+//! periods of mains hum (`PERIOD_HOPS`).
 //! An enrolled take's onset is placed by the same stages, run on the take after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
 //! first consonant (the "p" of "pew") is found; an impulse whose two placements differ
@@ -94,6 +95,17 @@ pub(super) const MAX_SHIFT: usize = 1;
 /// frame (see [`OnsetParams`]).
 const FLOOR_RISE_DB_PER_S: f32 = 3.0;
 const FLOOR_FALL_DB_PER_S: f32 = 100.0;
+/// The hops that cover the longest period of mains hum (50 Hz, 20 ms): 7 hops of 2.9
+/// ms, 20.3 ms. A frame (11.6 ms) is shorter than a period, so the power
+/// of a frame of steady hum swings with the hum's phase (by 6 dB at 50 Hz, 40 dB under
+/// full scale), and a floor that follows the quietest frames sits in the dips. The
+/// quiet-before rise, and the spans of recognised sounds that end where a new sound
+/// rises by its measure, measure the sound over a floor that follows the power of whole
+/// periods instead (`SpectralMatcher::rise_levels`): over that floor, the swing is no
+/// sound before an onset. Over every dev set, the unheard voices and the rooms, the
+/// hits are as they were and the hum rooms regain their exact copies; 10 ms (half a
+/// period) does not, 40 ms does as 20 ms (`docs/rooms.md`, "Mains hum").
+const PERIOD_HOPS: usize = 7;
 
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
@@ -111,14 +123,15 @@ struct PatternInfo {
 
 /// What an onset's first window showed ([`SpectralMatcher::first_look`]): its best
 /// pattern, the evidence that does not depend on the pattern, the energy of its
-/// decision window and its peak level (dB of sound). Kept while its decision waits for
-/// more windows, so that every gate judges the first window once.
+/// decision window and its peak level (dB of sound, by the quiet-before rise's measure:
+/// where its span starts to follow its sound). Kept while its decision waits for more
+/// windows, so that every gate judges the first window once.
 #[derive(Clone, Copy)]
 struct FirstLook {
     best: usize,
     context: Evidence,
     early: f64,
-    peak: f32,
+    rise_peak: f32,
 }
 
 /// A placed onset waiting for its decision.
@@ -260,7 +273,13 @@ pub struct SpectralMatcher {
     since_frame: usize,
     /// Ring of log-mel frames, `BANDS` each.
     frames: Vec<f32>,
+    /// Per frame: the sound in it over the room's noise (`sound_level_db` over
+    /// `heard_floor_db`), for the speech guard and a held sound's strength.
     levels: Vec<f32>,
+    /// Per frame: the same over the noise of whole periods of mains hum
+    /// (`period_floor_db`), for the quiet-before rise and the spans of recognised
+    /// sounds, which end where a new sound rises by that measure.
+    rise_levels: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
     frame_count: u64,
@@ -270,6 +289,14 @@ pub struct SpectralMatcher {
     noise_floor_db: f32,
     /// The same of the room as the bands hear it (for `levels`).
     heard_floor_db: f32,
+    /// The same over the power of the last `PERIOD_HOPS` hops (a whole period of mains
+    /// hum) as the bands hear them (for `rise_levels`).
+    period_floor_db: f32,
+    /// Energy of each of the last `PERIOD_HOPS` hops' samples as the bands hear them (by
+    /// frame, modulo `PERIOD_HOPS`).
+    hop_energies: [f64; PERIOD_HOPS],
+    /// How many of `hop_energies` hold a hop's (all, once a period has come).
+    period_hops_seen: usize,
     placer: Placer,
     pending: Vec<PendingOnset>,
     /// Placed onsets that found `pending` full.
@@ -542,6 +569,7 @@ impl SpectralMatcher {
             since_frame: 0,
             frames: vec![0.0; frame_capacity * BANDS],
             levels: vec![SILENT_DB; frame_capacity],
+            rise_levels: vec![SILENT_DB; frame_capacity],
             frame_capacity,
             frame_count: 0,
             onsets: OnsetDetector::new(
@@ -553,6 +581,9 @@ impl SpectralMatcher {
             ),
             noise_floor_db: 0.0,
             heard_floor_db: 0.0,
+            period_floor_db: 0.0,
+            hop_energies: [0.0; PERIOD_HOPS],
+            period_hops_seen: 0,
             placer: Placer::new(analyzer.hop),
             pending: Vec::with_capacity(16),
             pending_dropped: 0,
@@ -764,16 +795,34 @@ impl SpectralMatcher {
             }
         };
         self.noise_floor_db = follow(self.noise_floor_db, level);
-        let heard: f64 = (start..self.consumed)
-            .map(|n| f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2))
-            .sum();
+        // The frame's energy as the bands hear it, and its newest hop's.
+        let newest_hop = self.consumed - self.hop() as u64;
+        let (mut heard, mut hop_energy) = (0.0f64, 0.0f64);
+        for n in start..self.consumed {
+            let e = f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2);
+            heard += e;
+            if n >= newest_hop {
+                hop_energy += e;
+            }
+        }
         let heard_db = 10.0 * (heard / win as f64 + 1e-12).log10() as f32;
         self.heard_floor_db = follow(self.heard_floor_db, heard_db);
         self.levels[slot] = sound_level_db(heard_db, self.heard_floor_db);
+        let (period_db, whole) = self.period_db(f, hop_energy);
+        // Until a whole period is in, the floor is that of the hops so far.
+        self.period_floor_db = if whole {
+            follow(self.period_floor_db, period_db)
+        } else {
+            period_db
+        };
+        self.rise_levels[slot] = sound_level_db(heard_db, self.period_floor_db);
 
         let centre = self.analyzer.frame_centre(f);
-        self.context
-            .follow(centre, centre + self.hop() as u64 / 2, self.levels[slot]);
+        self.context.follow(
+            centre,
+            centre + self.hop() as u64 / 2,
+            self.rise_levels[slot],
+        );
         if let Some(onset) = self.onsets.push(&self.analyzer.power) {
             self.placer.detected(onset.frame);
         }
@@ -878,7 +927,7 @@ impl SpectralMatcher {
             best: mut pi,
             context,
             early,
-            peak,
+            rise_peak,
         } = first_look;
         let mut evidence = self.as_instance_of(pi, &context, early);
         let mut outcome = decide(&evidence, &self.gates);
@@ -951,7 +1000,7 @@ impl SpectralMatcher {
             if self.patterns[pi].kind == PatternKind::Continuous {
                 // A held sound covers as long as the held stage hears it go on.
                 self.end_stopped_held();
-                let loudest = self.loudest_since(onset_frame);
+                let loudest = self.loudest_since(&self.levels, onset_frame);
                 let slot = self.context.held_began(covered_from);
                 self.stopped_held_span = Some((slot, covered_from));
                 self.stopped_held
@@ -987,7 +1036,7 @@ impl SpectralMatcher {
             // A held sound it replaces ends first (a stopped one that was followed as
             // well), so that its end does not close the new one's span.
             self.end_stopped_held();
-            let loudest = self.loudest_since(onset_frame);
+            let loudest = self.loudest_since(&self.levels, onset_frame);
             let newest = self.frame_count - 1;
             if let Some(h) = self
                 .held
@@ -1001,7 +1050,7 @@ impl SpectralMatcher {
             self.context.fired_impulse(
                 covered_from,
                 time_sample + take_length,
-                peak,
+                rise_peak,
                 time_sample + SPAN_STRETCH * take_length,
             );
         }
@@ -1021,8 +1070,10 @@ impl SpectralMatcher {
     /// gathers the evidence that does not depend on the pattern; `None` without patterns
     /// (a matcher that only collects onsets' features for a background model).
     fn first_look(&mut self, time_sample: u64, onset_frame: u64) -> Option<FirstLook> {
-        let (peak, pre) = self.peak_and_before(time_sample, onset_frame);
-        if self.collected.is_some() && peak - pre >= self.gates.pre_quiet_db {
+        let rise_db = self.rise_db(time_sample, onset_frame);
+        let peak = self.loudest_since(&self.levels, onset_frame);
+        let rise_peak = self.loudest_since(&self.rise_levels, onset_frame);
+        if self.collected.is_some() && rise_db >= self.gates.pre_quiet_db {
             self.pool_instance(onset_frame);
             if let Some(collected) = &mut self.collected {
                 collected.extend_from_slice(&self.instance);
@@ -1042,7 +1093,7 @@ impl SpectralMatcher {
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
         let context = Evidence {
-            rise_db: peak - pre,
+            rise_db,
             over_fired_impulse: self.over_fired_impulse(time_sample),
             follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
             continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
@@ -1057,7 +1108,7 @@ impl SpectralMatcher {
             best,
             context,
             early,
-            peak,
+            rise_peak,
         })
     }
 
@@ -1112,20 +1163,20 @@ impl SpectralMatcher {
         best
     }
 
-    /// The loudest level (dB of sound) of the frames from `onset_frame`, and of the
-    /// frames before the onset at `time_sample` in the quiet-before span. A vocal hit
-    /// stands out of relative quiet; a consonant inside speech follows a vowel, so an
-    /// onset whose last tens of milliseconds were nearly as loud is rejected. The
-    /// frames before are those whose whole window lies in the span.
-    fn peak_and_before(&self, time_sample: u64, onset_frame: u64) -> (f32, f32) {
+    /// How far the sound of the onset at `time_sample` (frame `onset_frame`) rose out
+    /// of the quiet-before span, dB: the loudest of its frames from `onset_frame` less the
+    /// loudest before (the frames whose whole window lies in the span), both over the
+    /// noise of whole periods of hum (`rise_levels`). A vocal hit stands out of relative
+    /// quiet; a consonant inside speech follows a vowel, so an onset whose last tens of
+    /// milliseconds were nearly as loud is rejected.
+    fn rise_db(&self, time_sample: u64, onset_frame: u64) -> f32 {
         let cap = self.frame_capacity as u64;
-        let peak = self.loudest_since(onset_frame);
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         let pre = self
             .frames_inside(quiet_from, quiet_to)
-            .map(|f| self.levels[(f % cap) as usize])
+            .map(|f| self.rise_levels[(f % cap) as usize])
             .fold(f32::NEG_INFINITY, f32::max);
-        (peak, pre)
+        self.loudest_since(&self.rise_levels, onset_frame) - pre
     }
 
     /// Whether a frame of the quiet-before span of the onset at `time_sample` lies in
@@ -1365,6 +1416,36 @@ impl SpectralMatcher {
         )
     }
 
+    /// The power (dB) of the samples as the bands hear them over the last
+    /// `PERIOD_HOPS` hops, at frame `f` whose newest hop's energy is `hop_energy`, and
+    /// whether that many hops have come yet (if not, the power of those that have).
+    fn period_db(&mut self, f: u64, hop_energy: f64) -> (f32, bool) {
+        let hop = self.hop() as u64;
+        let period = PERIOD_HOPS as u64;
+        let energy = |end: u64| -> f64 {
+            (end - hop..end)
+                .map(|n| f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2))
+                .sum()
+        };
+        if f == 0 {
+            // The first frame's window holds several hops already.
+            self.period_hops_seen = (self.consumed / hop).min(period) as usize;
+            for back in 0..self.period_hops_seen as u64 {
+                self.hop_energies[((period - back) % period) as usize] =
+                    energy(self.consumed - back * hop);
+            }
+        } else {
+            self.hop_energies[(f % period) as usize] = hop_energy;
+            self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
+        }
+        let power = self.hop_energies.iter().sum::<f64>()
+            / (self.period_hops_seen.max(1) as u64 * hop) as f64;
+        (
+            10.0 * (power + 1e-12).log10() as f32,
+            self.period_hops_seen == PERIOD_HOPS,
+        )
+    }
+
     /// Ends the held sound the guard stopped, if one is going on.
     fn end_stopped_held(&mut self) {
         if let Some(h) = self.stopped_held.end() {
@@ -1382,22 +1463,23 @@ impl SpectralMatcher {
     /// guard looks back.
     fn end_held_span(&mut self, span: Option<(usize, u64)>, end_sample: u64) {
         if let Some((slot, from)) = span {
-            let newest = self.newest_level();
+            let newest = self.newest_rise_level();
             let limit = end_sample + self.guard_samples();
             self.context.end_held(slot, from, end_sample, newest, limit);
         }
     }
 
-    /// The loudest level (dB of sound) of the frames from `first` to the newest.
-    fn loudest_since(&self, first: u64) -> f32 {
+    /// The loudest of the per-frame `levels` (`self.levels` or `self.rise_levels`, dB of
+    /// sound) of the frames from `first` to the newest.
+    fn loudest_since(&self, levels: &[f32], first: u64) -> f32 {
         (first..self.frame_count)
-            .map(|f| self.levels[(f % self.frame_capacity as u64) as usize])
+            .map(|f| levels[(f % self.frame_capacity as u64) as usize])
             .fold(f32::NEG_INFINITY, f32::max)
     }
 
-    /// The newest frame's level (dB of sound).
-    fn newest_level(&self) -> f32 {
-        self.levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize]
+    /// The newest frame's `rise_levels` (dB of sound).
+    fn newest_rise_level(&self) -> f32 {
+        self.rise_levels[((self.frame_count.max(1) - 1) % self.frame_capacity as u64) as usize]
     }
 
     /// Where a held sound ends: at the end of its last matching frame's centre hop.
@@ -1442,5 +1524,20 @@ impl SpectralMatcher {
             emitted_at: self.consumed as f64 / self.rate,
             pitch,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_period_hops_cover_a_period_of_50_hz_mains_and_less_than_a_hop_more() {
+        let covered = PERIOD_HOPS as f64 * HOP_SECONDS;
+        let period = 1.0 / 50.0;
+        assert!(
+            covered >= period && covered - HOP_SECONDS < period,
+            "{covered} s"
+        );
     }
 }
