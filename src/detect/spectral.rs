@@ -103,8 +103,9 @@ const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 /// rises by its measure, measure the sound over a floor that follows the power of whole
 /// periods instead (`SpectralMatcher::rise_levels`): over that floor, the swing is no
 /// sound before an onset. Over every dev set, the unheard voices and the rooms, the
-/// hits are as they were and the hum rooms regain their exact copies; 10 ms (half a
-/// period) does not, 40 ms does as 20 ms (`docs/rooms.md`, "Mains hum").
+/// hits are as they were and the hum rooms regain most of their exact copies; from 6 to
+/// 35 hops they do, 7 and 8 alike, longer lets more speech through, half a period (10
+/// ms) does not (`docs/rooms.md`, "Mains hum").
 const PERIOD_HOPS: usize = 7;
 
 /// Frames of features and samples kept: the longest speech guard and a decision.
