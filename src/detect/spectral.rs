@@ -1421,26 +1421,10 @@ impl SpectralMatcher {
     /// `PERIOD_HOPS` hops, at frame `f` whose newest hop's energy is `hop_energy`, and
     /// whether that many hops have come yet (if not, the power of those that have).
     fn period_db(&mut self, f: u64, hop_energy: f64) -> (f32, bool) {
-        let hop = self.hop() as u64;
-        let period = PERIOD_HOPS as u64;
-        let energy = |end: u64| -> f64 {
-            (end - hop..end)
-                .map(|n| f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2))
-                .sum()
-        };
-        if f == 0 {
-            // The first frame's window holds several hops already.
-            self.period_hops_seen = (self.consumed / hop).min(period) as usize;
-            for back in 0..self.period_hops_seen as u64 {
-                self.hop_energies[((period - back) % period) as usize] =
-                    energy(self.consumed - back * hop);
-            }
-        } else {
-            self.hop_energies[(f % period) as usize] = hop_energy;
-            self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
-        }
-        let power = self.hop_energies.iter().sum::<f64>()
-            / (self.period_hops_seen.max(1) as u64 * hop) as f64;
+        self.hop_energies[(f % PERIOD_HOPS as u64) as usize] = hop_energy;
+        self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
+        let power =
+            self.hop_energies.iter().sum::<f64>() / (self.period_hops_seen * self.hop()) as f64;
         (
             10.0 * (power + 1e-12).log10() as f32,
             self.period_hops_seen == PERIOD_HOPS,
