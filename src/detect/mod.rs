@@ -16,6 +16,7 @@ mod envelope;
 mod features;
 pub mod gates;
 mod held;
+mod levels;
 pub mod onset;
 mod pitch;
 mod place;

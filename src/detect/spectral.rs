@@ -12,10 +12,10 @@
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
 //! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
 //! so on. The levels they compare are the sound in a frame as the bands hear it (the
-//! rumble under them cut, [`LowCut`]), its power less twice the room's noise
-//! (`sound_level_db`), so that noise just under a sound neither hides it nor passes
-//! for speech around it; for the rise out of the quiet before, the noise of whole
-//! periods of mains hum (`PERIOD_HOPS`).
+//! rumble under them cut, [`LowCut`]), its power less twice the room's noise (the
+//! level stage, [`super::levels`]), so that noise just under a sound neither hides it
+//! nor passes for speech around it; for the rise out of the quiet before, the noise of
+//! whole periods of mains hum.
 //! An enrolled take's onset is placed by the same stages, run on the take after noise:
 //! once in a room as loud as the take allows and once in a quiet one, where a soft
 //! first consonant (the "p" of "pew") is found; an impulse whose two placements differ
@@ -73,6 +73,7 @@ use super::features::{
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
+use super::levels::{Levels, SILENT_DB};
 use super::onset::{Onset, OnsetDetector, OnsetParams};
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
@@ -91,23 +92,6 @@ const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.005;
 /// Shift tolerance when comparing frames with a template.
 pub(super) const MAX_SHIFT: usize = 1;
-/// The noise floor rises this fast, dB per second, and falls this fast towards a quieter
-/// frame (see [`OnsetParams`]).
-const FLOOR_RISE_DB_PER_S: f32 = 3.0;
-const FLOOR_FALL_DB_PER_S: f32 = 100.0;
-/// The hops that cover the longest period of mains hum (50 Hz, 20 ms): 7 hops of 2.9
-/// ms, 20.3 ms. A frame (11.6 ms) is shorter than a period, so the power
-/// of a frame of steady hum swings with the hum's phase (by 6 dB at 50 Hz, 40 dB under
-/// full scale), and a floor that follows the quietest frames sits in the dips. The
-/// quiet-before rise, and the spans of recognised sounds that end where a new sound
-/// rises by its measure, measure the sound over a floor that follows the power of whole
-/// periods instead (`SpectralMatcher::rise_levels`): over that floor, the swing is no
-/// sound before an onset. Over every dev set, the unheard voices and the rooms, the
-/// hits are as they were and the hum rooms regain most of their exact copies; from 6 to
-/// 35 hops they do, 7 and 8 alike, longer lets more speech through, half a period (10
-/// ms) does not (`docs/rooms.md`, "Mains hum").
-const PERIOD_HOPS: usize = 7;
-
 /// Frames of features and samples kept: the longest speech guard and a decision.
 const HISTORY_SECONDS: f64 = crate::config::MAX_SPEECH_GUARD_SECONDS + 0.25;
 
@@ -213,19 +197,6 @@ pub(super) fn run_onset_stage(
     (win, hop)
 }
 
-/// The level of the sound in a frame of `level_db`, over a room whose noise is at
-/// `floor_db`: the frame's power less twice the noise's, in dB (`SILENT_DB` when that
-/// is nothing). The gates compare sounds with each other: noise a few dB under a
-/// sound must not pass for a sound just before it, or for speech around it.
-fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
-    let excess = 10f32.powf(level_db / 10.0) - 2.0 * 10f32.powf(floor_db / 10.0);
-    if excess > 0.0 {
-        (10.0 * excess.log10()).max(SILENT_DB)
-    } else {
-        SILENT_DB
-    }
-}
-
 /// The features of every onset in `samples` (at `settings.sample_rate`) that stands out
 /// of its quiet, as the matcher with `settings` pools them: a background model
 /// (`examples/background_model.rs`).
@@ -253,9 +224,6 @@ fn ring_slot(ring: &[f32], n: u64) -> usize {
     (n & (ring.len() as u64 - 1)) as usize
 }
 
-/// The level of a frame without sound, dB.
-const SILENT_DB: f32 = -120.0;
-
 /// Streaming spectral matcher.
 pub struct SpectralMatcher {
     rate: f64,
@@ -274,30 +242,19 @@ pub struct SpectralMatcher {
     since_frame: usize,
     /// Ring of log-mel frames, `BANDS` each.
     frames: Vec<f32>,
-    /// Per frame: the sound in it over the room's noise (`sound_level_db` over
-    /// `heard_floor_db`), for the speech guard and a held sound's strength.
+    /// Per frame: the sound in it over the room's noise ([`super::levels::FrameLevels::sound`]), for
+    /// the speech guard and a held sound's strength.
     levels: Vec<f32>,
     /// Per frame: the same over the noise of whole periods of mains hum
-    /// (`period_floor_db`), for the quiet-before rise and the spans of recognised
+    /// ([`super::levels::FrameLevels::rise`]), for the quiet-before rise and the spans of recognised
     /// sounds, which end where a new sound rises by that measure.
     rise_levels: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
     frame_count: u64,
     onsets: OnsetDetector,
-    /// The broadband level of the room (for the placement, which measures the samples):
-    /// follows quieter frames at once, rises slowly.
-    noise_floor_db: f32,
-    /// The same of the room as the bands hear it (for `levels`).
-    heard_floor_db: f32,
-    /// The same over the power of the last `PERIOD_HOPS` hops (a whole period of mains
-    /// hum) as the bands hear them (for `rise_levels`).
-    period_floor_db: f32,
-    /// Energy of each of the last `PERIOD_HOPS` hops' samples as the bands hear them (by
-    /// frame, modulo `PERIOD_HOPS`).
-    hop_energies: [f64; PERIOD_HOPS],
-    /// How many of `hop_energies` hold a hop's (all, once a period has come).
-    period_hops_seen: usize,
+    /// The sound of each frame over the room's noise ([`super::levels`]).
+    level_stage: Levels,
     placer: Placer,
     pending: Vec<PendingOnset>,
     /// Placed onsets that found `pending` full.
@@ -580,11 +537,7 @@ impl SpectralMatcher {
                 analyzer.hop,
                 rate,
             ),
-            noise_floor_db: 0.0,
-            heard_floor_db: 0.0,
-            period_floor_db: 0.0,
-            hop_energies: [0.0; PERIOD_HOPS],
-            period_hops_seen: 0,
+            level_stage: Levels::new(win, analyzer.hop),
             placer: Placer::new(analyzer.hop),
             pending: Vec::with_capacity(16),
             pending_dropped: 0,
@@ -785,17 +738,6 @@ impl SpectralMatcher {
         let slot = (f % self.frame_capacity as u64) as usize;
         self.frames[slot * BANDS..(slot + 1) * BANDS].copy_from_slice(&self.frame_buf);
         self.frame_count += 1;
-        // Noise floor: follows quieter frames, at a bounded rate (as the onset stage's).
-        let rise = FLOOR_RISE_DB_PER_S * HOP_SECONDS as f32;
-        let fall = FLOOR_FALL_DB_PER_S * HOP_SECONDS as f32;
-        let follow = |floor: f32, level: f32| {
-            if f == 0 {
-                level
-            } else {
-                (floor + rise).min(level.max(floor - fall))
-            }
-        };
-        self.noise_floor_db = follow(self.noise_floor_db, level);
         // The frame's energy as the bands hear it, and its newest hop's.
         let newest_hop = self.consumed - self.hop() as u64;
         let (mut heard, mut hop_energy) = (0.0f64, 0.0f64);
@@ -806,17 +748,9 @@ impl SpectralMatcher {
                 hop_energy += e;
             }
         }
-        let heard_db = 10.0 * (heard / win as f64 + 1e-12).log10() as f32;
-        self.heard_floor_db = follow(self.heard_floor_db, heard_db);
-        self.levels[slot] = sound_level_db(heard_db, self.heard_floor_db);
-        let (period_db, whole) = self.period_db(f, hop_energy);
-        // Until a whole period is in, the floor is that of the hops so far.
-        self.period_floor_db = if whole {
-            follow(self.period_floor_db, period_db)
-        } else {
-            period_db
-        };
-        self.rise_levels[slot] = sound_level_db(heard_db, self.period_floor_db);
+        let frame_levels = self.level_stage.push(level, heard, hop_energy);
+        self.levels[slot] = frame_levels.sound;
+        self.rise_levels[slot] = frame_levels.rise;
 
         let centre = self.analyzer.frame_centre(f);
         self.context.follow(
@@ -830,7 +764,7 @@ impl SpectralMatcher {
         let oldest = self.consumed.saturating_sub(self.samples.len() as u64);
         let samples = &self.samples;
         // The room's noise for placement: the level of its quietest frames.
-        let noise_power = 10f64.powf(f64::from(self.noise_floor_db) / 10.0);
+        let noise_power = self.level_stage.noise_power();
         while let Some(time_sample) =
             self.placer
                 .next(self.frame_count, self.consumed, oldest, noise_power, |n| {
@@ -1417,20 +1351,6 @@ impl SpectralMatcher {
         )
     }
 
-    /// The power (dB) of the samples as the bands hear them over the last
-    /// `PERIOD_HOPS` hops, at frame `f` whose newest hop's energy is `hop_energy`, and
-    /// whether that many hops have come yet (if not, the power of those that have).
-    fn period_db(&mut self, f: u64, hop_energy: f64) -> (f32, bool) {
-        self.hop_energies[(f % PERIOD_HOPS as u64) as usize] = hop_energy;
-        self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
-        let power =
-            self.hop_energies.iter().sum::<f64>() / (self.period_hops_seen * self.hop()) as f64;
-        (
-            10.0 * (power + 1e-12).log10() as f32,
-            self.period_hops_seen == PERIOD_HOPS,
-        )
-    }
-
     /// Ends the held sound the guard stopped, if one is going on.
     fn end_stopped_held(&mut self) {
         if let Some(h) = self.stopped_held.end() {
@@ -1509,20 +1429,5 @@ impl SpectralMatcher {
             emitted_at: self.consumed as f64 / self.rate,
             pitch,
         });
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_period_hops_cover_a_period_of_50_hz_mains_and_less_than_a_hop_more() {
-        let covered = PERIOD_HOPS as f64 * HOP_SECONDS;
-        let period = 1.0 / 50.0;
-        assert!(
-            covered >= period && covered - HOP_SECONDS < period,
-            "{covered} s"
-        );
     }
 }
