@@ -242,12 +242,13 @@ pub struct SpectralMatcher {
     since_frame: usize,
     /// Ring of log-mel frames, `BANDS` each.
     frames: Vec<f32>,
-    /// Per frame: the sound in it over the room's noise ([`super::levels::FrameLevels::sound`]), for
-    /// the speech guard and a held sound's strength.
+    /// Per frame: the sound in it over the room's noise
+    /// ([`super::levels::FrameLevels::sound`]), for the speech guard and a held sound's
+    /// strength.
     levels: Vec<f32>,
     /// Per frame: the same over the noise of whole periods of mains hum
-    /// ([`super::levels::FrameLevels::rise`]), for the quiet-before rise and the spans of recognised
-    /// sounds, which end where a new sound rises by that measure.
+    /// ([`super::levels::FrameLevels::rise`]), for the quiet-before rise and the spans of
+    /// recognised sounds, which end where a new sound rises by that measure.
     rise_levels: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
