@@ -43,12 +43,12 @@ pub(super) fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
     }
 }
 
-/// One frame's sound over the room's noise, dB (`SILENT_DB` for none).
+/// One frame's sound over the room's noise ([`sound_level_db`]; `SILENT_DB` for none).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct FrameLevels {
-    /// Over the floor of the frames' power as the bands hear it.
+    /// Over the floor under the frames' power as the bands hear it.
     pub(super) sound: f32,
-    /// Over the floor of the power of the last `PERIOD_HOPS` hops.
+    /// Over the floor under the power of the last `PERIOD_HOPS` hops.
     pub(super) rise: f32,
 }
 
