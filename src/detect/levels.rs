@@ -212,4 +212,40 @@ mod tests {
         let rise = levels[inside].rise;
         assert!((rise - burst_db).abs() < 1.0, "{rise} dB for {burst_db} dB");
     }
+
+    #[test]
+    fn a_full_scale_burst_lifts_no_floor_so_a_sound_after_it_rises_as_before() {
+        // The room: steady noise-like hiss 50 dB under full scale (a fixed sequence).
+        let mut state = 1u32;
+        let mut hiss = |_| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            0.003 * ((state >> 8) as f32 / (1u32 << 24) as f32 - 0.5) * 2.0
+        };
+        let room: Vec<f32> = (0..(2.0 * RATE) as usize).map(&mut hiss).collect();
+        let tone_at = (1.6 * RATE) as usize;
+        let with_tone = |mut x: Vec<f32>| {
+            for (n, v) in x[tone_at..tone_at + 2 * WIN].iter_mut().enumerate() {
+                *v += 0.03 * (2.0 * std::f32::consts::PI * 1000.0 * n as f32 / RATE as f32).sin();
+            }
+            x
+        };
+        let mut burst = room.clone();
+        // 10 ms at full scale, 0.3 s before the tone.
+        let burst_at = tone_at - (0.3 * RATE) as usize;
+        for v in &mut burst[burst_at..burst_at + (0.01 * RATE) as usize] {
+            *v = if *v >= 0.0 { 1.0 } else { -1.0 };
+        }
+        let (plain, after_burst) = (levels_of(&with_tone(room)), levels_of(&with_tone(burst)));
+        let inside = tone_at / HOP + 2;
+        let (a, b) = (plain[inside], after_burst[inside]);
+        assert!(a.sound > SILENT_DB && a.rise > SILENT_DB, "{a:?}");
+        assert!(
+            (a.sound - b.sound).abs() < 0.5,
+            "{a:?} without the burst, {b:?} after it"
+        );
+        assert!(
+            (a.rise - b.rise).abs() < 0.5,
+            "{a:?} without the burst, {b:?} after it"
+        );
+    }
 }
