@@ -28,13 +28,13 @@ const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 /// as they were and the hum rooms regain most of their exact copies; from 6 to 35 hops
 /// they do, 7 and 8 alike, longer lets more speech through, half a period (10 ms) does
 /// not (`docs/rooms.md`, "Mains hum").
-pub(super) const PERIOD_HOPS: usize = 7;
+const PERIOD_HOPS: usize = 7;
 
 /// The level of the sound in a frame of `level_db`, over a room whose noise is at
 /// `floor_db`: the frame's power less twice the noise's, in dB (`SILENT_DB` when that
 /// is nothing). The gates compare sounds with each other: noise a few dB under a
 /// sound must not pass for a sound just before it, or for speech around it.
-pub(super) fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
+fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
     let excess = 10f32.powf(level_db / 10.0) - 2.0 * 10f32.powf(floor_db / 10.0);
     if excess > 0.0 {
         (10.0 * excess.log10()).max(SILENT_DB)
