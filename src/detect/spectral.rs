@@ -30,7 +30,7 @@
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), each take as
 //! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
-//! the voice as it drifts from the takes (`SpectralMatcher::track`). The best pattern
+//! the voice as it drifts from the takes ([`super::classify::Tracked`]). The best pattern
 //! wins if its score passes its threshold; below, the sound is none of the patterns and
 //! nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
@@ -61,15 +61,15 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::background::BackgroundModel;
-use super::classify::{default_noise_over_floor, Room};
+use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
 use super::context::{Context, ContextParams, SPAN_STRETCH};
 use super::enrol::{
     first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    features_of_power, normalise, pool_power, scale_to_unit, similarity, Analyzer, LowCut, BANDS,
-    FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, similarity, Analyzer, LowCut, BANDS, FEATURES,
+    HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -289,10 +289,9 @@ pub struct SpectralMatcher {
     min_gap_samples: u64,
     /// The last impulse fired, whose take may still be going on.
     last_impulse: Option<FiredImpulse>,
-    /// Per pattern, `FEATURES` each: the impulse as its user has lately made it (see
-    /// [`SpectralMatcher::track`]); scored only once `tracked_set`.
-    tracked: Vec<f32>,
-    tracked_set: Vec<bool>,
+    /// The impulse of each pattern as its user has lately made it, scored as its takes
+    /// are ([`Tracked`]).
+    tracked: Tracked,
     /// Per pattern, the scores of the onset being classified.
     pattern_scores: Vec<PatternScore>,
     /// The instance's features at the shift that scored best.
@@ -382,12 +381,6 @@ impl PatternScore {
         take_score: f32::NEG_INFINITY,
     };
 }
-
-/// See [`SpectralMatcher::track`]: how far each confident instance moves the tracked
-/// template...
-const TRACK_RATE: f32 = 0.5;
-/// ...confident meaning at least this far over the pattern's threshold.
-const TRACK_CONFIDENCE: f32 = 0.15;
 
 #[derive(Clone, Copy)]
 struct FiredImpulse {
@@ -564,8 +557,7 @@ impl SpectralMatcher {
             last_fired: None,
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
-            tracked: vec![0.0; n_patterns * FEATURES],
-            tracked_set: vec![false; n_patterns],
+            tracked: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
@@ -1167,10 +1159,9 @@ impl SpectralMatcher {
                 .background_score
                 .max(self.background.nearest(&self.instance));
             for (pi, s) in self.pattern_scores.iter_mut().enumerate() {
-                if !self.tracked_set[pi] {
+                let Some(tracked) = self.tracked.template(pi) else {
                     continue;
-                }
-                let tracked = &self.tracked[pi * FEATURES..(pi + 1) * FEATURES];
+                };
                 let score = similarity(tracked, &self.instance);
                 s.score = s.score.max(score);
                 if score > best {
@@ -1181,20 +1172,8 @@ impl SpectralMatcher {
         }
     }
 
-    /// Follows a voice that drifts: a performer's "k" an hour in is not the "k" of
-    /// the take. Each impulse pattern has a tracked template besides its takes, scored
-    /// as they are. An instance of pattern `pi` recognised with confidence (at least
-    /// `TRACK_CONFIDENCE` over its threshold, its pattern the best over the first
-    /// window, whose features are what is tracked) becomes it the first time, and then
-    /// moves it by `TRACK_RATE` towards itself. The takes stay as enrolled, and every
-    /// pattern has one tracked template however many takes it has, so no pattern gains
-    /// weight by being heard more. The rate and the confidence are swept over every dev
-    /// set in `docs/classify.md` (without tracking the mean F1 falls by 0.034, most of
-    /// it on real hits); asking the instance also to stand a margin over every other
-    /// pattern kept hits alike from following their voice (the sweep there). A new
-    /// template from every confident instance instead (up to 8 per pattern) cost the
-    /// isolated set of `examples/eval_beatbox.rs` at 30-120 ms gaps 0.07-0.09 when it
-    /// was tried (with plain correlations, before `LIFTER_POWER`).
+    /// Lets the tracked template of `pi`, which fired, follow this instance
+    /// ([`Tracked::follow`]).
     fn track(&mut self, pi: usize) {
         let best = self.pattern_scores[pi].score;
         let second = self
@@ -1204,19 +1183,13 @@ impl SpectralMatcher {
             .filter(|&(p, _)| p != pi)
             .map(|(_, s)| s.score)
             .fold(f32::NEG_INFINITY, f32::max);
-        if best < self.patterns[pi].threshold + TRACK_CONFIDENCE || best < second {
-            return;
-        }
-        let tracked = &mut self.tracked[pi * FEATURES..(pi + 1) * FEATURES];
-        if self.tracked_set[pi] {
-            for (t, x) in tracked.iter_mut().zip(&self.best_instance) {
-                *t += TRACK_RATE * (x - *t);
-            }
-            scale_to_unit(tracked);
-        } else {
-            tracked.copy_from_slice(&self.best_instance);
-            self.tracked_set[pi] = true;
-        }
+        self.tracked.follow(
+            pi,
+            &self.best_instance,
+            best,
+            second,
+            self.patterns[pi].threshold,
+        );
     }
 
     /// Energy of the samples (received so far) of the decision window from
