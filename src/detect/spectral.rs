@@ -1231,8 +1231,8 @@ impl SpectralMatcher {
     /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
     /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
     /// onset (give or take `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room,
-    /// sounds alike (similarity at least `CONTINUATION_SIMILARITY`) at the level the impulse's strength predicts
-    /// (within `CONTINUATION_DB`).
+    /// sounds alike (similarity at least `CONTINUATION_SIMILARITY`) at the level the
+    /// impulse's strength predicts (within `CONTINUATION_DB`).
     fn continues_last_impulse(&mut self, time_sample: u64, onset_frame: u64) -> bool {
         let Some(last) = self.last_impulse else {
             return false;
