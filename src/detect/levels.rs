@@ -8,14 +8,10 @@
 //! detector thread, inside the spectral matcher, once per frame; allocates nothing.
 
 use super::features::HOP_SECONDS;
+use super::onset::OnsetParams;
 
 /// The level of a frame without sound, dB.
 pub(super) const SILENT_DB: f32 = -120.0;
-
-/// A floor rises this fast, dB per second, and falls this fast towards a quieter frame
-/// (as the onset stage's, [`super::onset::OnsetParams`]).
-const FLOOR_RISE_DB_PER_S: f32 = 3.0;
-const FLOOR_FALL_DB_PER_S: f32 = 100.0;
 
 /// The hops that cover the longest period of mains hum (50 Hz, 20 ms): 7 hops of 2.9
 /// ms, 20.3 ms. A frame (11.6 ms) is shorter than a period, so the power
@@ -73,13 +69,14 @@ pub(super) struct Levels {
 }
 
 impl Levels {
-    /// For frames of `win` samples, `hop` apart.
-    pub(super) fn new(win: usize, hop: usize) -> Self {
+    /// For frames of `win` samples, `hop` apart; each floor rises and falls at most as
+    /// fast as the onset stage's band floors (`onset`).
+    pub(super) fn new(win: usize, hop: usize, onset: &OnsetParams) -> Self {
         Self {
             hop,
             win,
-            rise_per_frame: FLOOR_RISE_DB_PER_S * HOP_SECONDS as f32,
-            fall_per_frame: FLOOR_FALL_DB_PER_S * HOP_SECONDS as f32,
+            rise_per_frame: onset.floor_rise_db_per_s * HOP_SECONDS as f32,
+            fall_per_frame: onset.floor_fall_db_per_s * HOP_SECONDS as f32,
             frames: 0,
             noise_floor_db: 0.0,
             heard_floor_db: 0.0,
@@ -150,7 +147,7 @@ mod tests {
     /// Each frame's levels for `x`, its frames as the matcher makes them (the
     /// analyser's level taken as the heard power's).
     fn levels_of(x: &[f32]) -> Vec<FrameLevels> {
-        let mut levels = Levels::new(WIN, HOP);
+        let mut levels = Levels::new(WIN, HOP, &OnsetParams::default());
         (WIN..=x.len())
             .step_by(HOP)
             .map(|end| {

@@ -531,7 +531,7 @@ impl SpectralMatcher {
                 analyzer.hop,
                 rate,
             ),
-            level_stage: Levels::new(win, analyzer.hop),
+            level_stage: Levels::new(win, analyzer.hop, &onset_params),
             placer: Placer::new(analyzer.hop),
             pending: Vec::with_capacity(16),
             pending_dropped: 0,
