@@ -998,9 +998,9 @@ impl SpectralMatcher {
     /// gathers the evidence that does not depend on the pattern; `None` without patterns
     /// (a matcher that only collects onsets' features for a background model).
     fn first_look(&mut self, time_sample: u64, onset_frame: u64) -> Option<FirstLook> {
-        let rise_db = self.rise_db(time_sample, onset_frame);
         let peak = self.loudest_since(&self.levels, onset_frame);
         let rise_peak = self.loudest_since(&self.rise_levels, onset_frame);
+        let rise_db = rise_peak - self.loudest_before(time_sample);
         if self.collected.is_some() && rise_db >= self.gates.pre_quiet_db {
             self.pool_instance(onset_frame);
             if let Some(collected) = &mut self.collected {
@@ -1091,20 +1091,18 @@ impl SpectralMatcher {
         best
     }
 
-    /// How far the sound of the onset at `time_sample` (frame `onset_frame`) rose out
-    /// of the quiet-before span, dB: the loudest of its frames from `onset_frame` less the
-    /// loudest before (the frames whose whole window lies in the span), both over the
-    /// noise of whole periods of hum (`rise_levels`). A vocal hit stands out of relative
-    /// quiet; a consonant inside speech follows a vowel, so an onset whose last tens of
-    /// milliseconds were nearly as loud is rejected.
-    fn rise_db(&self, time_sample: u64, onset_frame: u64) -> f32 {
+    /// The loudest of the frames before the onset at `time_sample` whose whole window
+    /// lies in its quiet-before span, over the noise of whole periods of hum
+    /// (`rise_levels`, dB of sound). How far an onset's sound rises over it is the
+    /// quiet-before rise: a vocal hit stands out of relative quiet; a consonant inside
+    /// speech follows a vowel, so an onset whose last tens of milliseconds were nearly
+    /// as loud is rejected.
+    fn loudest_before(&self, time_sample: u64) -> f32 {
         let cap = self.frame_capacity as u64;
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
-        let pre = self
-            .frames_inside(quiet_from, quiet_to)
+        self.frames_inside(quiet_from, quiet_to)
             .map(|f| self.rise_levels[(f % cap) as usize])
-            .fold(f32::NEG_INFINITY, f32::max);
-        self.loudest_since(&self.rise_levels, onset_frame) - pre
+            .fold(f32::NEG_INFINITY, f32::max)
     }
 
     /// Whether a frame of the quiet-before span of the onset at `time_sample` lies in
