@@ -81,6 +81,9 @@ struct Span {
     /// An impulse that fired (rather than a held sound, or a pattern's sound that only
     /// the guard stopped).
     fired: bool,
+    /// A stopped impulse that was no clear instance of its pattern: unrecognised sound
+    /// for the guard, but one it does not pass on ([`Context::guard`]).
+    unclear: bool,
 }
 
 impl Span {
@@ -88,6 +91,7 @@ impl Span {
         from: u64::MAX,
         to: u64::MAX,
         fired: false,
+        unclear: false,
     };
 
     /// Whether the span holds sample `n`.
@@ -141,6 +145,18 @@ impl Context {
             from,
             to,
             fired: false,
+            unclear: false,
+        });
+    }
+
+    /// An impulse the guard stopped that was no clear instance of its pattern covers
+    /// samples `from..=to` as unrecognised sound ([`Context::guard`]).
+    pub(super) fn stopped_unclear(&mut self, from: u64, to: u64) {
+        self.push(Span {
+            from,
+            to,
+            fired: false,
+            unclear: true,
         });
     }
 
@@ -152,6 +168,7 @@ impl Context {
             from,
             to,
             fired: true,
+            unclear: false,
         });
         self.growing = Some(Growing {
             slot,
@@ -189,6 +206,7 @@ impl Context {
             from,
             to: u64::MAX,
             fired: false,
+            unclear: false,
         })
     }
 
@@ -233,25 +251,51 @@ impl Context {
 
     /// Whether some recognised sound holds sample `n`.
     pub(super) fn recognised_at(&self, n: u64) -> bool {
-        self.spans.iter().any(|s| s.holds(n))
+        self.spans.iter().any(|s| !s.unclear && s.holds(n))
+    }
+
+    /// Whether an unclear stopped impulse holds sample `n`.
+    fn unclear_at(&self, n: u64) -> bool {
+        self.spans.iter().any(|s| s.unclear && s.holds(n))
     }
 
     /// The speech guard: whether `frames` (centre sample, level dB; the guard's span
     /// before an onset) hold `guard_sound_seconds` of frames within `guard_db` of the new
     /// sound's `peak_db` that no recognised sound covers. A frame is judged by the
-    /// sample at its centre.
-    pub(super) fn follows_unrecognised_sound(
-        &self,
-        frames: impl Iterator<Item = (u64, f32)>,
-        peak_db: f32,
-    ) -> bool {
-        frames
-            .filter(|&(centre, level)| {
-                level >= peak_db - self.params.guard_db && !self.recognised_at(centre)
-            })
-            .count()
-            >= self.guard_frames
+    /// sample at its centre. An unclear stopped impulse's frames count
+    /// ([`Context::stopped_unclear`]), but when the guard closes only with them it says
+    /// so, and what it stops then covers its span again: a stop passes on once at most.
+    pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
+        let (mut unrecognised, mut unclear) = (0, 0);
+        for (centre, level) in frames {
+            if level < peak_db - self.params.guard_db || self.recognised_at(centre) {
+                continue;
+            }
+            if self.unclear_at(centre) {
+                unclear += 1;
+            } else {
+                unrecognised += 1;
+            }
+        }
+        if unrecognised >= self.guard_frames {
+            Guard::Closed
+        } else if unrecognised + unclear >= self.guard_frames {
+            Guard::ClosedByUnclear
+        } else {
+            Guard::Open
+        }
     }
+}
+
+/// The speech guard's judgement of the sound before an onset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Guard {
+    /// Too little unrecognised sound.
+    Open,
+    /// Enough sound that no pattern recognised.
+    Closed,
+    /// Enough only with the unclear stopped impulses' sound counted.
+    ClosedByUnclear,
 }
 
 #[cfg(test)]
@@ -264,6 +308,10 @@ mod tests {
         Context::new(ContextParams::new(0.65, 10.0), HOP)
     }
 
+    fn closed(c: &Context, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> bool {
+        c.guard(frames, peak_db) != Guard::Open
+    }
+
     /// Frames 1 ms apart (centres in samples of 1 kHz) from `from` for `count` frames,
     /// at `level` dB.
     fn frames(from: u64, count: u64, level: f32) -> impl Iterator<Item = (u64, f32)> {
@@ -273,15 +321,15 @@ mod tests {
     #[test]
     fn two_hundred_ms_of_unrecognised_sound_near_the_peak_close_the_guard() {
         let c = context();
-        assert!(c.follows_unrecognised_sound(frames(0, 200, -25.0), -20.0));
-        assert!(!c.follows_unrecognised_sound(frames(0, 199, -25.0), -20.0));
+        assert!(closed(&c, frames(0, 200, -25.0), -20.0));
+        assert!(!closed(&c, frames(0, 199, -25.0), -20.0));
     }
 
     #[test]
     fn sound_more_than_10_db_under_the_peak_does_not_count() {
         let c = context();
-        assert!(c.follows_unrecognised_sound(frames(0, 300, -30.0), -20.0));
-        assert!(!c.follows_unrecognised_sound(frames(0, 300, -30.1), -20.0));
+        assert!(closed(&c, frames(0, 300, -30.0), -20.0));
+        assert!(!closed(&c, frames(0, 300, -30.1), -20.0));
     }
 
     #[test]
@@ -293,11 +341,27 @@ mod tests {
             } else {
                 c.stopped(50, 149);
             }
-            assert!(!c.follows_unrecognised_sound(frames(0, 250, -25.0), -20.0));
-            assert!(c.follows_unrecognised_sound(frames(0, 300, -25.0), -20.0));
+            assert!(!closed(&c, frames(0, 250, -25.0), -20.0));
+            assert!(closed(&c, frames(0, 300, -25.0), -20.0));
             assert_eq!(c.fired_at(100), fired);
             assert!(c.recognised_at(100) && !c.recognised_at(150));
         }
+    }
+
+    #[test]
+    fn an_unclear_stopped_impulse_is_unrecognised_sound_that_passes_a_stop_on_once() {
+        let mut c = context();
+        c.stopped_unclear(100, 249);
+        assert!(!c.recognised_at(100));
+        // 150 ms of it and 100 ms of other unrecognised sound: closed by it alone.
+        let before = || frames(0, 100, -25.0).chain(frames(100, 150, -25.0));
+        assert_eq!(c.guard(before(), -20.0), Guard::ClosedByUnclear);
+        // With 200 ms of other unrecognised sound the guard is closed as it always was.
+        assert_eq!(c.guard(frames(300, 200, -25.0), -20.0), Guard::Closed);
+        assert_eq!(c.guard(frames(0, 100, -25.0), -20.0), Guard::Open);
+        // A recognised sound over it covers it.
+        c.stopped(100, 249);
+        assert_eq!(c.guard(before(), -20.0), Guard::Open);
     }
 
     #[test]

@@ -62,7 +62,7 @@ use serde::Serialize;
 
 use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
-use super::context::{Context, ContextParams, SPAN_STRETCH};
+use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
 use super::enrol::{
     first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
@@ -117,6 +117,8 @@ struct FirstLook {
     context: Evidence,
     early: f64,
     rise_peak: f32,
+    /// The speech guard's judgement of the sound before it.
+    guard: Guard,
 }
 
 /// A placed onset waiting for its decision.
@@ -856,6 +858,7 @@ impl SpectralMatcher {
             context,
             early,
             rise_peak,
+            guard,
         } = first_look;
         let mut evidence = self.as_instance_of(pi, &context, early);
         let mut outcome = decide(&evidence, &self.gates);
@@ -917,8 +920,12 @@ impl SpectralMatcher {
         }
         // A sound the guard stopped, but that the threshold and the background would
         // have let through, is a pattern's sound too: it covers its span as a fired one
-        // does, so the guard never feeds on its own decisions (only sounds that are
-        // none of the patterns keep it closed).
+        // does, so the guard does not feed on its own decisions (only sounds that are
+        // none of the patterns keep it closed). An impulse that lies as near speech as
+        // to its pattern (within the background's margin either way) and that the
+        // guard stopped on unrecognised sound is that talk going on: it counts as
+        // unrecognised sound, but what it alone closes the guard on covers again, so
+        // one stop passes on once at most (`docs/speech-guard.md`).
         // A recognised sound is covered from where the guard's look ends before it.
         let covered_from = self.quiet_before_span(time_sample).1;
         if outcome == Outcome::SpeechGuard
@@ -934,10 +941,14 @@ impl SpectralMatcher {
                 self.stopped_held
                     .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
             } else {
-                self.context.stopped(
-                    covered_from,
-                    time_sample + self.templates[best_template].length_after_onset,
-                );
+                let to = time_sample + self.templates[best_template].length_after_onset;
+                let near_speech =
+                    best_score - evidence.background_score < self.gates.background_margin;
+                if near_speech && guard == Guard::Closed {
+                    self.context.stopped_unclear(covered_from, to);
+                } else {
+                    self.context.stopped(covered_from, to);
+                }
             }
         }
         if outcome != Outcome::Fired {
@@ -1020,10 +1031,11 @@ impl SpectralMatcher {
         // Once per onset, so that the explanation has it too: a sum over the 25 ms
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
+        let guard = self.guard(time_sample, peak);
         let context = Evidence {
             rise_db,
             over_fired_impulse: self.over_fired_impulse(time_sample),
-            follows_unrecognised_sound: self.follows_unrecognised_sound(time_sample, peak),
+            follows_unrecognised_sound: guard != Guard::Open,
             continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
@@ -1037,6 +1049,7 @@ impl SpectralMatcher {
             context,
             early,
             rise_peak,
+            guard,
         })
     }
 
@@ -1280,12 +1293,11 @@ impl SpectralMatcher {
         (self.context.params().guard_seconds * self.rate) as u64
     }
 
-    /// Whether the `speech_guard_seconds` before an onset (up to 5 ms before it) hold
-    /// enough unrecognised sound near the new sound's `peak` (dB) for the speech guard
-    /// ([`Context::follows_unrecognised_sound`]): the onset is then part of a longer
-    /// unrecognised sound, such as a consonant inside speech. The frames are those whose
-    /// whole window lies in that span.
-    fn follows_unrecognised_sound(&self, time_sample: u64, peak: f32) -> bool {
+    /// The speech guard's judgement ([`Context::guard`]) of the `speech_guard_seconds`
+    /// before an onset (up to 5 ms before it), near the new sound's `peak` (dB): whether
+    /// the onset is part of a longer unrecognised sound, such as a consonant inside
+    /// speech. The frames are those whose whole window lies in that span.
+    fn guard(&self, time_sample: u64, peak: f32) -> Guard {
         let cap = self.frame_capacity as u64;
         let from = time_sample.saturating_sub(self.guard_samples());
         let to = self.quiet_before_span(time_sample).1;
@@ -1295,7 +1307,7 @@ impl SpectralMatcher {
                 self.levels[(f % cap) as usize],
             )
         });
-        self.context.follows_unrecognised_sound(frames, peak)
+        self.context.guard(frames, peak)
     }
 
     /// Feeds frame `f` to the stage that follows a held sound the guard stopped; its
