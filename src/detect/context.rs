@@ -9,10 +9,14 @@
 //! ([`Context::follow`]); a held sound covers up to its end, then its sound dying away
 //! the same way for as long as the guard looks back; a pattern's sound
 //! that only the guard stopped covers its take's length too (a held one, up to the end
-//! the held stage finds for it, then as it dies away), so the guard never feeds on its
-//! own decisions: only sounds that are none of the patterns keep it closed. It
-//! judges only the frames of the guard's span before an onset, so it opens within that
-//! span of the last unrecognised sound, whatever follows.
+//! the held stage finds for it, then as it dies away), so that only sounds that are
+//! none of the patterns keep the guard closed. The one exception passes a stop on once
+//! at most: an impulse the guard stopped on such sound, and that lies as near speech as
+//! to its pattern, is the same talk going on and counts as unrecognised
+//! ([`Context::stopped_unclear`]), but what it alone closes the guard on covers again
+//! ([`Guard::ClosedByUnclear`]). The guard judges only the frames of its span before an
+//! onset, so it opens within two spans and a take's length of the last sound no
+//! pattern recognised, whatever follows.
 //!
 //! A stage of the spectral matcher ([`super::spectral`]), which gives it the frames of
 //! that span as (centre sample, level dB); runs on the detector thread, fixed size,
