@@ -11,12 +11,12 @@
 //! that only the guard stopped covers its take's length too (a held one, up to the end
 //! the held stage finds for it, then as it dies away), so that only sounds that are
 //! none of the patterns keep the guard closed. The one exception passes a stop on once
-//! at most: an impulse the guard stopped on such sound, and that lies as near speech as
-//! to its pattern, is the same talk going on and counts as unrecognised
-//! ([`Context::stopped_unclear`]), but what it alone closes the guard on covers again
-//! ([`Guard::ClosedByUnclear`]). The guard judges only the frames of its span before an
-//! onset, so it opens within two spans and a take's length of the last sound no
-//! pattern recognised, whatever follows.
+//! at most: a sound the guard stopped on such sound, and that lies as near speech as to
+//! its pattern, is the same talk going on and counts as unrecognised (`unclear`, in
+//! [`Context::stopped`] and [`Context::held_began`]), but what it alone closes the guard
+//! on covers again ([`Guard::ClosedByUnclear`]). The guard judges only the frames of
+//! its span before an onset, so it opens within two of its spans and a stopped sound's
+//! length of the last sound no pattern recognised, whatever follows.
 //!
 //! A stage of the spectral matcher ([`super::spectral`]), which gives it the frames of
 //! that span as (centre sample, level dB); runs on the detector thread, fixed size,
@@ -143,24 +143,15 @@ impl Context {
         &self.params
     }
 
-    /// A pattern's sound that only the guard stopped covers samples `from..=to`.
-    pub(super) fn stopped(&mut self, from: u64, to: u64) {
+    /// A pattern's sound that only the guard stopped covers samples `from..=to`; an
+    /// `unclear` one (as near speech as to its pattern, stopped on sound no pattern
+    /// recognised) as unrecognised sound ([`Context::guard`]).
+    pub(super) fn stopped(&mut self, from: u64, to: u64, unclear: bool) {
         self.push(Span {
             from,
             to,
             fired: false,
-            unclear: false,
-        });
-    }
-
-    /// An impulse the guard stopped that was no clear instance of its pattern covers
-    /// samples `from..=to` as unrecognised sound ([`Context::guard`]).
-    pub(super) fn stopped_unclear(&mut self, from: u64, to: u64) {
-        self.push(Span {
-            from,
-            to,
-            fired: false,
-            unclear: true,
+            unclear,
         });
     }
 
@@ -203,14 +194,15 @@ impl Context {
     }
 
     /// A held sound (one that fired, or one that only the guard stopped) covers from
-    /// sample `from` until it ends ([`Context::end_held`]); returns its span's slot.
-    pub(super) fn held_began(&mut self, from: u64) -> usize {
+    /// sample `from` until it ends ([`Context::end_held`]), as unrecognised sound if
+    /// `unclear` ([`Context::stopped`]); returns its span's slot.
+    pub(super) fn held_began(&mut self, from: u64, unclear: bool) -> usize {
         self.growing = None;
         self.push(Span {
             from,
             to: u64::MAX,
             fired: false,
-            unclear: false,
+            unclear,
         })
     }
 
@@ -258,7 +250,7 @@ impl Context {
         self.spans.iter().any(|s| !s.unclear && s.holds(n))
     }
 
-    /// Whether an unclear stopped impulse holds sample `n`.
+    /// Whether an unclear stopped sound holds sample `n`.
     fn unclear_at(&self, n: u64) -> bool {
         self.spans.iter().any(|s| s.unclear && s.holds(n))
     }
@@ -266,8 +258,8 @@ impl Context {
     /// The speech guard: whether `frames` (centre sample, level dB; the guard's span
     /// before an onset) hold `guard_sound_seconds` of frames within `guard_db` of the new
     /// sound's `peak_db` that no recognised sound covers. A frame is judged by the
-    /// sample at its centre. An unclear stopped impulse's frames count
-    /// ([`Context::stopped_unclear`]), but when the guard closes only with them it says
+    /// sample at its centre. An unclear stopped sound's frames count
+    /// ([`Context::stopped`]), but when the guard closes only with them it says
     /// so, and what it stops then covers its span again: a stop passes on once at most.
     pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
         let (mut unrecognised, mut unclear) = (0, 0);
@@ -298,7 +290,7 @@ pub(super) enum Guard {
     Open,
     /// Enough sound that no pattern recognised.
     Closed,
-    /// Enough only with the unclear stopped impulses' sound counted.
+    /// Enough only with the unclear stopped sounds counted.
     ClosedByUnclear,
 }
 
@@ -343,7 +335,7 @@ mod tests {
             if fired {
                 c.fired_impulse(50, 149, -20.0, 149);
             } else {
-                c.stopped(50, 149);
+                c.stopped(50, 149, false);
             }
             assert!(!closed(&c, frames(0, 250, -25.0), -20.0));
             assert!(closed(&c, frames(0, 300, -25.0), -20.0));
@@ -353,25 +345,33 @@ mod tests {
     }
 
     #[test]
-    fn an_unclear_stopped_impulse_is_unrecognised_sound_that_passes_a_stop_on_once() {
-        let mut c = context();
-        c.stopped_unclear(100, 249);
-        assert!(!c.recognised_at(100));
-        // 150 ms of it and 100 ms of other unrecognised sound: closed by it alone.
-        let before = || frames(0, 100, -25.0).chain(frames(100, 150, -25.0));
-        assert_eq!(c.guard(before(), -20.0), Guard::ClosedByUnclear);
-        // With 200 ms of other unrecognised sound the guard is closed as it always was.
-        assert_eq!(c.guard(frames(300, 200, -25.0), -20.0), Guard::Closed);
-        assert_eq!(c.guard(frames(0, 100, -25.0), -20.0), Guard::Open);
-        // A recognised sound over it covers it.
-        c.stopped(100, 249);
-        assert_eq!(c.guard(before(), -20.0), Guard::Open);
+    fn an_unclear_stopped_sound_is_unrecognised_sound_that_passes_a_stop_on_once() {
+        // An impulse's span, and a held sound's until it ends.
+        for held in [false, true] {
+            let mut c = context();
+            if held {
+                let slot = c.held_began(100, true);
+                c.end_held(slot, 100, 249, -60.0, 249);
+            } else {
+                c.stopped(100, 249, true);
+            }
+            assert!(!c.recognised_at(100));
+            // 150 ms of it and 100 ms of other unrecognised sound: closed by it alone.
+            let before = || frames(0, 100, -25.0).chain(frames(100, 150, -25.0));
+            assert_eq!(c.guard(before(), -20.0), Guard::ClosedByUnclear);
+            // With 200 ms of other unrecognised sound the guard is closed as it was.
+            assert_eq!(c.guard(frames(300, 200, -25.0), -20.0), Guard::Closed);
+            assert_eq!(c.guard(frames(0, 100, -25.0), -20.0), Guard::Open);
+            // A recognised sound over it covers it.
+            c.stopped(100, 249, false);
+            assert_eq!(c.guard(before(), -20.0), Guard::Open);
+        }
     }
 
     #[test]
     fn a_held_sound_the_guard_stopped_covers_until_it_ends_then_as_it_dies_away() {
         let mut c = context();
-        let slot = c.held_began(50);
+        let slot = c.held_began(50, false);
         assert!(c.recognised_at(50) && c.recognised_at(5000) && !c.fired_at(100));
         c.end_held(slot, 50, 900, -20.0, 2000);
         assert!(c.recognised_at(900) && !c.recognised_at(901));
@@ -383,9 +383,9 @@ mod tests {
         assert!(c.recognised_at(999) && !c.recognised_at(1000));
         // A span whose slot newer spans took is left alone.
         let mut c = context();
-        let slot = c.held_began(50);
+        let slot = c.held_began(50, false);
         for k in 0..SPANS as u64 {
-            c.stopped(100 + 10 * k, 105 + 10 * k);
+            c.stopped(100 + 10 * k, 105 + 10 * k, false);
         }
         c.end_held(slot, 50, 900, -20.0, 2000);
         assert!(!c.recognised_at(900) && !c.recognised_at(60));
@@ -395,8 +395,8 @@ mod tests {
     fn each_held_sound_ends_its_own_span() {
         // A held sound that fired, and one the guard stopped while it went on.
         let mut c = context();
-        let fired = c.held_began(0);
-        let stopped = c.held_began(300);
+        let fired = c.held_began(0, false);
+        let stopped = c.held_began(300, false);
         c.end_held(fired, 0, 500, -60.0, 500);
         assert!(
             c.recognised_at(5000),
@@ -406,8 +406,8 @@ mod tests {
         assert!(c.recognised_at(900) && !c.recognised_at(901));
         // Ended in the other order, each span keeps its own end.
         let mut c = context();
-        let fired = c.held_began(0);
-        let stopped = c.held_began(300);
+        let fired = c.held_began(0, false);
+        let stopped = c.held_began(300, false);
         c.end_held(stopped, 300, 400, -60.0, 400);
         assert!(c.recognised_at(5000), "the fired held sound goes on");
         c.end_held(fired, 0, 900, -60.0, 900);
@@ -465,7 +465,7 @@ mod tests {
     #[test]
     fn a_held_sound_covers_its_sound_dying_away_after_its_end_up_to_a_limit() {
         let mut c = context();
-        let slot = c.held_began(0);
+        let slot = c.held_began(0, false);
         c.end_held(slot, 0, 500, -30.0, 700);
         for centre in 501..600 {
             c.follow(centre, centre, -30.0 - 0.2 * (centre - 500) as f32);
@@ -477,7 +477,7 @@ mod tests {
             "a sound rising 10 dB out of the tail is new"
         );
         let mut c = context();
-        let slot = c.held_began(0);
+        let slot = c.held_began(0, false);
         c.end_held(slot, 0, 500, -30.0, 700);
         for centre in 501..800 {
             c.follow(centre, centre, -40.0);
@@ -488,12 +488,12 @@ mod tests {
     #[test]
     fn a_held_sound_covers_until_it_ends_and_the_oldest_span_is_forgotten() {
         let mut c = context();
-        let slot = c.held_began(0);
+        let slot = c.held_began(0, false);
         assert!(c.recognised_at(1_000_000));
         c.end_held(slot, 0, 500, -60.0, 500);
         assert!(c.recognised_at(500) && !c.recognised_at(501));
         for k in 1..=SPANS as u64 {
-            c.stopped(1000 * k, 1000 * k + 10);
+            c.stopped(1000 * k, 1000 * k + 10, false);
         }
         assert!(!c.recognised_at(0), "the held sound's span was the oldest");
         assert!(c.recognised_at(1000));

@@ -921,34 +921,30 @@ impl SpectralMatcher {
         // A sound the guard stopped, but that the threshold and the background would
         // have let through, is a pattern's sound too: it covers its span as a fired one
         // does, so the guard does not feed on its own decisions (only sounds that are
-        // none of the patterns keep it closed). An impulse that lies as near speech as
-        // to its pattern (within the background's margin either way) and that the
-        // guard stopped on unrecognised sound is that talk going on: it counts as
-        // unrecognised sound, but what it alone closes the guard on covers again, so
-        // one stop passes on once at most (`docs/speech-guard.md`).
+        // none of the patterns keep it closed). One that lies as near speech as to its
+        // pattern (within the background's margin either way) and that the guard
+        // stopped on unrecognised sound is that talk going on: it counts as
+        // unrecognised sound, but what it alone closes the guard on covers again, so a
+        // stop passes on once at most (`docs/speech-guard.md`).
         // A recognised sound is covered from where the guard's look ends before it.
         let covered_from = self.quiet_before_span(time_sample).1;
         if outcome == Outcome::SpeechGuard
             && !evidence.below_threshold()
             && !evidence.like_speech(&self.gates)
         {
+            let unclear = guard == Guard::Closed
+                && best_score - evidence.background_score < self.gates.background_margin;
             if self.patterns[pi].kind == PatternKind::Continuous {
                 // A held sound covers as long as the held stage hears it go on.
                 self.end_stopped_held();
                 let loudest = self.loudest_since(&self.levels, onset_frame);
-                let slot = self.context.held_began(covered_from);
+                let slot = self.context.held_began(covered_from, unclear);
                 self.stopped_held_span = Some((slot, covered_from));
                 self.stopped_held
                     .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
             } else {
                 let to = time_sample + self.templates[best_template].length_after_onset;
-                let near_speech =
-                    best_score - evidence.background_score < self.gates.background_margin;
-                if near_speech && guard == Guard::Closed {
-                    self.context.stopped_unclear(covered_from, to);
-                } else {
-                    self.context.stopped(covered_from, to);
-                }
+                self.context.stopped(covered_from, to, unclear);
             }
         }
         if outcome != Outcome::Fired {
@@ -983,7 +979,7 @@ impl SpectralMatcher {
             {
                 self.close_held(h, out);
             }
-            let slot = self.context.held_began(covered_from);
+            let slot = self.context.held_began(covered_from, false);
             self.held_span = Some((slot, covered_from));
         } else {
             self.context.fired_impulse(
