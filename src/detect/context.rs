@@ -12,9 +12,9 @@
 //! the held stage finds for it, then as it dies away), so that only sounds that are
 //! none of the patterns keep the guard closed. The one exception passes a stop on once
 //! at most: a sound the guard stopped on such sound, and that lies as near speech as to
-//! its pattern, is the same talk going on and counts as unrecognised (`unclear`, in
+//! its pattern, is the same talk going on and counts as unrecognised (`near_speech`, in
 //! [`Context::stopped`] and [`Context::held_began`]), but what it alone closes the guard
-//! on covers again ([`Guard::ClosedByUnclear`]). The guard judges only the frames of
+//! on covers again ([`Guard::ClosedByStopped`]). The guard judges only the frames of
 //! its span before an onset, so it opens within two of its spans and a stopped sound's
 //! length of the last sound no pattern recognised, whatever follows.
 //!
@@ -85,9 +85,10 @@ struct Span {
     /// An impulse that fired (rather than a held sound, or a pattern's sound that only
     /// the guard stopped).
     fired: bool,
-    /// A stopped impulse that was no clear instance of its pattern: unrecognised sound
-    /// for the guard, but one it does not pass on ([`Context::guard`]).
-    unclear: bool,
+    /// A sound the guard stopped on unrecognised sound that lies as near speech as to
+    /// its pattern: unrecognised sound for the guard, but one it does not pass on
+    /// ([`Context::guard`]).
+    near_speech: bool,
 }
 
 impl Span {
@@ -95,7 +96,7 @@ impl Span {
         from: u64::MAX,
         to: u64::MAX,
         fired: false,
-        unclear: false,
+        near_speech: false,
     };
 
     /// Whether the span holds sample `n`.
@@ -143,15 +144,15 @@ impl Context {
         &self.params
     }
 
-    /// A pattern's sound that only the guard stopped covers samples `from..=to`; an
-    /// `unclear` one (as near speech as to its pattern, stopped on sound no pattern
+    /// A pattern's sound that only the guard stopped covers samples `from..=to`; one
+    /// `near_speech` (as near speech as to its pattern, stopped on sound no pattern
     /// recognised) as unrecognised sound ([`Context::guard`]).
-    pub(super) fn stopped(&mut self, from: u64, to: u64, unclear: bool) {
+    pub(super) fn stopped(&mut self, from: u64, to: u64, near_speech: bool) {
         self.push(Span {
             from,
             to,
             fired: false,
-            unclear,
+            near_speech,
         });
     }
 
@@ -163,7 +164,7 @@ impl Context {
             from,
             to,
             fired: true,
-            unclear: false,
+            near_speech: false,
         });
         self.growing = Some(Growing {
             slot,
@@ -195,14 +196,14 @@ impl Context {
 
     /// A held sound (one that fired, or one that only the guard stopped) covers from
     /// sample `from` until it ends ([`Context::end_held`]), as unrecognised sound if
-    /// `unclear` ([`Context::stopped`]); returns its span's slot.
-    pub(super) fn held_began(&mut self, from: u64, unclear: bool) -> usize {
+    /// `near_speech` ([`Context::stopped`]); returns its span's slot.
+    pub(super) fn held_began(&mut self, from: u64, near_speech: bool) -> usize {
         self.growing = None;
         self.push(Span {
             from,
             to: u64::MAX,
             fired: false,
-            unclear,
+            near_speech,
         })
     }
 
@@ -247,36 +248,36 @@ impl Context {
 
     /// Whether some recognised sound holds sample `n`.
     pub(super) fn recognised_at(&self, n: u64) -> bool {
-        self.spans.iter().any(|s| !s.unclear && s.holds(n))
+        self.spans.iter().any(|s| !s.near_speech && s.holds(n))
     }
 
-    /// Whether an unclear stopped sound holds sample `n`.
-    fn unclear_at(&self, n: u64) -> bool {
-        self.spans.iter().any(|s| s.unclear && s.holds(n))
+    /// Whether a stopped sound near speech holds sample `n`.
+    fn near_speech_at(&self, n: u64) -> bool {
+        self.spans.iter().any(|s| s.near_speech && s.holds(n))
     }
 
     /// The speech guard: whether `frames` (centre sample, level dB; the guard's span
     /// before an onset) hold `guard_sound_seconds` of frames within `guard_db` of the new
     /// sound's `peak_db` that no recognised sound covers. A frame is judged by the
-    /// sample at its centre. An unclear stopped sound's frames count
-    /// ([`Context::stopped`]), but when the guard closes only with them it says
-    /// so, and what it stops then covers its span again: a stop passes on once at most.
+    /// sample at its centre. Stopped sounds near speech count ([`Context::stopped`]), but
+    /// when the guard closes only with them it says so, and what it stops then covers
+    /// its span again: a stop passes on once at most.
     pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
-        let (mut unrecognised, mut unclear) = (0, 0);
+        let (mut unrecognised, mut near_speech) = (0, 0);
         for (centre, level) in frames {
             if level < peak_db - self.params.guard_db || self.recognised_at(centre) {
                 continue;
             }
-            if self.unclear_at(centre) {
-                unclear += 1;
+            if self.near_speech_at(centre) {
+                near_speech += 1;
             } else {
                 unrecognised += 1;
             }
         }
         if unrecognised >= self.guard_frames {
             Guard::Closed
-        } else if unrecognised + unclear >= self.guard_frames {
-            Guard::ClosedByUnclear
+        } else if unrecognised + near_speech >= self.guard_frames {
+            Guard::ClosedByStopped
         } else {
             Guard::Open
         }
@@ -290,8 +291,8 @@ pub(super) enum Guard {
     Open,
     /// Enough sound that no pattern recognised.
     Closed,
-    /// Enough only with the unclear stopped sounds counted.
-    ClosedByUnclear,
+    /// Enough only with the stopped sounds near speech counted.
+    ClosedByStopped,
 }
 
 #[cfg(test)]
@@ -345,7 +346,7 @@ mod tests {
     }
 
     #[test]
-    fn an_unclear_stopped_sound_is_unrecognised_sound_that_passes_a_stop_on_once() {
+    fn a_stopped_sound_near_speech_is_unrecognised_sound_that_passes_a_stop_on_once() {
         // An impulse's span, and a held sound's until it ends.
         for held in [false, true] {
             let mut c = context();
@@ -358,7 +359,7 @@ mod tests {
             assert!(!c.recognised_at(100));
             // 150 ms of it and 100 ms of other unrecognised sound: closed by it alone.
             let before = || frames(0, 100, -25.0).chain(frames(100, 150, -25.0));
-            assert_eq!(c.guard(before(), -20.0), Guard::ClosedByUnclear);
+            assert_eq!(c.guard(before(), -20.0), Guard::ClosedByStopped);
             // With 200 ms of other unrecognised sound the guard is closed as it was.
             assert_eq!(c.guard(frames(300, 200, -25.0), -20.0), Guard::Closed);
             assert_eq!(c.guard(frames(0, 100, -25.0), -20.0), Guard::Open);

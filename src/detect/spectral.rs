@@ -932,19 +932,19 @@ impl SpectralMatcher {
             && !evidence.below_threshold()
             && !evidence.like_speech(&self.gates)
         {
-            let unclear = guard == Guard::Closed
+            let near_speech = guard == Guard::Closed
                 && best_score - evidence.background_score < self.gates.background_margin;
             if self.patterns[pi].kind == PatternKind::Continuous {
                 // A held sound covers as long as the held stage hears it go on.
                 self.end_stopped_held();
                 let loudest = self.loudest_since(&self.levels, onset_frame);
-                let slot = self.context.held_began(covered_from, unclear);
+                let slot = self.context.held_began(covered_from, near_speech);
                 self.stopped_held_span = Some((slot, covered_from));
                 self.stopped_held
                     .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
             } else {
                 let to = time_sample + self.templates[best_template].length_after_onset;
-                self.context.stopped(covered_from, to, unclear);
+                self.context.stopped(covered_from, to, near_speech);
             }
         }
         if outcome != Outcome::Fired {
