@@ -184,7 +184,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  {}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  {}{}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -198,7 +198,8 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             }),
             r.window_seconds
                 .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
-            r.outcome.as_str()
+            r.outcome.as_str(),
+            if r.guard_by_stopped_speech { "*" } else { "" },
         )?;
     }
     Ok(())

@@ -359,6 +359,10 @@ pub struct OnsetRecord {
     /// recognised word's tail, and an impulse pattern scoring `over_fired_score` there
     /// is not held to the rise.
     pub over_fired_impulse: bool,
+    /// The speech guard stopped it on sounds it had stopped before near speech: the
+    /// talk they belong to (their sound alone closed it; a sound stopped so covers its
+    /// span again).
+    pub guard_by_stopped_speech: bool,
     /// The sound the choice of its pattern was made on, seconds from the onset: one
     /// decision window, or more when its two best patterns are alike over one
     /// ([`separating_windows`]).
@@ -831,6 +835,7 @@ impl SpectralMatcher {
                 background_score: None,
                 rise_db: None,
                 over_fired_impulse: false,
+                guard_by_stopped_speech: false,
                 window_seconds: None,
                 outcome,
             });
@@ -911,6 +916,8 @@ impl SpectralMatcher {
                     .is_finite()
                     .then_some(f64::from(evidence.rise_db)),
                 over_fired_impulse: evidence.over_fired_impulse,
+                guard_by_stopped_speech: outcome == Outcome::SpeechGuard
+                    && guard == Guard::ClosedByStopped,
                 window_seconds: Some(self.heard_seconds(parted_over)),
                 outcome,
             };
