@@ -353,6 +353,61 @@ fn a_word_said_0_6_s_after_speech_is_found() {
     }
 }
 
+/// Issue: no rule may feed on its own decisions. A sound the guard stops on talk that
+/// lies as near speech as to its pattern counts as that talk going on, but a sound
+/// stopped on such sounds alone covers its span again: a stop passes on once at most.
+/// An enrolled "the" (a syllable of the voice's talk, as near its speech as to its
+/// take) said five times straight out of talking: the first is stopped as the talk, the
+/// second on the first alone (`speech_guard*`), and from the third on each is found.
+#[test]
+fn a_word_said_again_and_again_straight_after_talking_is_found_from_the_third_on() {
+    let dir = temp_dir("after-talking");
+    let settings = spectral();
+    let take = word(&dir, "the", "the", "175");
+    let patterns =
+        vec![Pattern::from_samples("the", PatternKind::Impulse, vec![take], &settings).unwrap()];
+    let speech = paragraph(&dir);
+    let mut rec = speech[..samples_for(3.3, RATE).min(speech.len())].to_vec();
+    let said = word(&dir, "the-said", "the", "175");
+    let mut onsets = Vec::new();
+    for _ in 0..5 {
+        rec.extend(vec![0.0; samples_for(0.15, RATE)]);
+        onsets.push(rec.len() as f64 / f64::from(RATE));
+        rec.extend(&said);
+    }
+    rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+    add_noise(&mut rec, 0.0005, 24);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let records = det.take_explain().unwrap_or_default();
+    let mut table = Vec::new();
+    onomato::analyze::write_explain(&mut table, &records).unwrap();
+    let table = String::from_utf8(table).unwrap();
+    let found = |onset: f64| events.iter().any(|e| (e.time - onset).abs() <= 0.05);
+    let outcome = |onset: f64| {
+        records
+            .iter()
+            .filter(|r| (r.time - onset).abs() <= 0.05)
+            .map(|r| (r.outcome, r.guard_by_stopped_speech))
+            .next()
+    };
+    use onomato::detect::gates::Outcome;
+    assert_eq!(
+        outcome(onsets[0]),
+        Some((Outcome::SpeechGuard, false)),
+        "{table}"
+    );
+    assert_eq!(
+        outcome(onsets[1]),
+        Some((Outcome::SpeechGuard, true)),
+        "{table}"
+    );
+    assert!(onsets[2..].iter().all(|&t| found(t)), "{table}");
+    let after_talking = events.iter().filter(|e| e.time > onsets[0] - 0.05).count();
+    assert_eq!(after_talking, 3, "{table}");
+}
+
 /// The detector's account of every onset it considered (`analyze --explain`'s table).
 fn explained(det: &mut Detector) -> String {
     let mut table = Vec::new();
