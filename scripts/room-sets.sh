@@ -7,6 +7,8 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE]]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -14,10 +16,15 @@
 # far under full scale) added to each file.
 # hum: mains buzz (a ground loop, a lamp's dimmer) of FREQUENCY Hz and its harmonics up
 # to the 8th, the k-th at 1/k of the fundamental (a sawtooth's spectrum), its peaks
-# LEVEL_DB under full scale, added to each file. All repeatable (sox -R).
+# LEVEL_DB under full scale, added to each file.
+# rate: each file resampled to RATE Hz, 16-bit (an input that carries less: a headset at
+# 16 kHz); with `sequences`, the sequences alone, the takes left as they were recorded
+# (enrolled through one microphone, heard through another).
+# lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
+# resampled to a full rate on its way in). All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -58,7 +65,27 @@ case $kind in
         mix=$(IFS=,; echo "${weights[*]}")
         added="$hum_hz Hz hum and 7 harmonics, peaks $level_db dB"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise or hum" >&2; exit 2 ;;
+    rate)
+        [ $# -ge 1 ] && [ $# -le 2 ] || usage
+        new_rate=$1 which=${2:-all}
+        case $new_rate in
+            '' | *[!0-9]*) echo "room-sets.sh: rate $new_rate: expected a sample rate in Hz, such as 16000" >&2; exit 2 ;;
+        esac
+        case $which in
+            all) added="every file at $new_rate Hz" ;;
+            sequences) added="the sequences at $new_rate Hz, the takes as they were" ;;
+            *) echo "room-sets.sh: rate $new_rate $which: expected nothing or 'sequences' after the rate" >&2; exit 2 ;;
+        esac
+        ;;
+    lowpass)
+        [ $# -eq 1 ] || usage
+        top_hz=$1
+        case $top_hz in
+            '' | *[!0-9]*) echo "room-sets.sh: lowpass $top_hz: expected a frequency in Hz, such as 6300" >&2; exit 2 ;;
+        esac
+        added="every file low-passed at $top_hz Hz"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate or lowpass" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -76,6 +103,14 @@ for set in "$src"/*/; do
         rel=${wav#"$set"/}
         if [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
+        elif [ "$kind" = lowpass ]; then
+            sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$top_hz"
+        elif [ "$kind" = rate ]; then
+            if [ "$which" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
+                cp "$wav" "$out/$name/$rel"
+            else
+                sox -R -V1 "$wav" -b 16 -r "$new_rate" "$out/$name/$rel"
+            fi
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)

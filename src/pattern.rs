@@ -35,6 +35,8 @@ pub struct Take {
     pub source: PathBuf,
     /// Mono samples at the working rate, DC removed, trimmed.
     pub samples: Vec<f32>,
+    /// The rate it was recorded at: nothing above its Nyquist frequency is in it.
+    pub recorded_rate: u32,
 }
 
 impl Take {
@@ -90,7 +92,7 @@ impl Pattern {
             .enumerate()
             .map(|(i, samples)| {
                 let source = PathBuf::from(format!("<take {}>", i + 1));
-                prepare_take(name, &source, samples, settings)
+                prepare_take(name, &source, samples, settings.sample_rate, settings)
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
@@ -154,13 +156,14 @@ fn load_take(
         return Err(bad("holds no audio (0 samples)".into()));
     }
     let samples = audio::resample_clip(&samples, rate, settings.sample_rate).map_err(audio_err)?;
-    prepare_take(pattern, path, samples, settings)
+    prepare_take(pattern, path, samples, rate, settings)
 }
 
 fn prepare_take(
     pattern: &str,
     path: &Path,
     mut samples: Vec<f32>,
+    recorded_rate: u32,
     settings: &DetectorSettings,
 ) -> Result<Take, PatternError> {
     let bad = |problem: String| PatternError::BadTake {
@@ -211,6 +214,7 @@ fn prepare_take(
     Ok(Take {
         source: path.to_path_buf(),
         samples,
+        recorded_rate,
     })
 }
 

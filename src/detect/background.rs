@@ -17,6 +17,8 @@
 
 use std::sync::{Arc, OnceLock};
 
+use super::features::{Cepstrum, BANDS};
+
 /// The built-in model (see the module comment).
 const BUILTIN: &[u8] = include_bytes!("background.bin");
 
@@ -79,6 +81,22 @@ impl BackgroundModel {
         } else {
             Self::default()
         }
+    }
+
+    /// The model as a matcher that compares only `cepstrum`'s bands sees it: each
+    /// template, pooled over every band, taken through [`Cepstrum::refeature`].
+    pub(super) fn compared_on(self, cepstrum: &Cepstrum) -> Self {
+        if cepstrum.bands() == BANDS || self.is_empty() {
+            return self;
+        }
+        let mut templates = vec![0.0f32; self.templates.len()];
+        for (out, full) in templates
+            .chunks_exact_mut(self.features)
+            .zip(self.templates.chunks_exact(self.features))
+        {
+            cepstrum.refeature(full, out);
+        }
+        Self::new(self.features, self.decision_frames, templates)
     }
 
     /// This model's templates and `other`'s, which must be pooled alike (an empty

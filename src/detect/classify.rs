@@ -12,7 +12,7 @@
 //! power spectrum, scaled to the onset's sound, plus the room's noise. In a quiet room
 //! that is the take as enrolled.
 
-use super::features::{features_of_power, scale_to_unit, Analyzer, BANDS};
+use super::features::{features_of_power, scale_to_unit, Analyzer, Cepstrum, BANDS};
 use super::onset::OnsetParams;
 use super::spectral::run_onset_stage;
 use super::{white_noise, NOISE_SEED};
@@ -102,11 +102,13 @@ impl Room {
         }
     }
 
-    /// The onset's sound: its pooled power spectrum (linear).
-    pub(super) fn hear(&mut self, onset_power: &[f32]) {
+    /// The onset's sound: its pooled power spectrum (linear), over the first `bands`
+    /// bands (those compared).
+    pub(super) fn hear(&mut self, onset_power: &[f32], bands: usize) {
         self.onset_above_noise = onset_power
             .iter()
             .zip(&self.noise)
+            .take(bands)
             .map(|(p, n)| (p - n).max(0.0))
             .sum();
     }
@@ -119,10 +121,10 @@ impl Room {
         &mut self,
         take_power: &[f32],
         drawn_towards: Option<&[f32]>,
-        basis: &[f32],
+        cepstrum: &Cepstrum,
         out: &mut [f32],
     ) {
-        let take: f32 = take_power.iter().sum();
+        let take: f32 = take_power.iter().take(cepstrum.bands()).sum();
         let gain = if take > 0.0 {
             self.onset_above_noise / take
         } else {
@@ -131,7 +133,7 @@ impl Room {
         for ((h, t), n) in self.heard.iter_mut().zip(take_power).zip(&self.noise) {
             *h = gain * t + n;
         }
-        features_of_power(&self.heard, basis, out);
+        features_of_power(&self.heard, cepstrum, out);
         if let Some(drawn) = drawn_towards {
             for (x, d) in out.iter_mut().zip(drawn) {
                 *x += d;
@@ -228,7 +230,7 @@ impl Tracked {
 
 #[cfg(test)]
 mod tests {
-    use super::super::features::{cepstrum_basis, pool_power, similarity, FEATURES};
+    use super::super::features::{pool_power, similarity, Cepstrum, FEATURES};
     use super::super::onset::OnsetDetector;
     use super::*;
 
@@ -283,7 +285,7 @@ mod tests {
     #[test]
     fn a_take_heard_in_the_onsets_room_matches_its_copy_in_noise() {
         let mut analyzer = Analyzer::new(RATE);
-        let basis = cepstrum_basis();
+        let basis = Cepstrum::full();
         let ratio = noise_over_floor(OnsetParams::default(), RATE);
         let n = 4096;
         let take = buzz(n);
@@ -317,7 +319,7 @@ mod tests {
         let as_enrolled = similarity(&features(&take_power), &copy_features);
         let mut room = Room::new(ratio.clone());
         room.set(&floors);
-        room.hear(&copy_power);
+        room.hear(&copy_power, BANDS);
         let mut heard = vec![0.0f32; FEATURES];
         room.take(&take_power, None, &basis, &mut heard);
         let in_room = similarity(&heard, &copy_features);
@@ -329,7 +331,7 @@ mod tests {
 
         // In a silent room the take is heard as enrolled.
         room.set(&[0.0; BANDS]);
-        room.hear(&take_power);
+        room.hear(&take_power, BANDS);
         room.take(&take_power, None, &basis, &mut heard);
         assert!(similarity(&heard, &features(&take_power)) > 0.9999);
     }

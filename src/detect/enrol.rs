@@ -6,7 +6,7 @@
 //! when a detector is built (on the thread that builds it), never per block.
 
 use super::features::{
-    features_of_power, pool_power, scale_to_unit, similarity, Analyzer, BANDS, FEATURES,
+    features_of_power, pool_power, scale_to_unit, similarity, Analyzer, Cepstrum, BANDS, FEATURES,
     HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::onset::OnsetParams;
@@ -133,7 +133,7 @@ pub(super) fn separating_windows(
     templates: &[Template],
     kinds: &[PatternKind],
     decision_frames: usize,
-    basis: &[f32],
+    cepstrum: &Cepstrum,
     alike: f32,
     max_windows: usize,
 ) -> Vec<u8> {
@@ -147,7 +147,7 @@ pub(super) fn separating_windows(
     {
         for (w, out) in chunk.chunks_exact_mut(FEATURES).enumerate() {
             window_power(t, w + 1, decision_frames, &mut power);
-            features_of_power(&power, basis, out);
+            features_of_power(&power, cepstrum, out);
         }
     }
     let of = |t: usize, w: usize| &features[(t * max_windows + w - 1) * FEATURES..][..FEATURES];

@@ -84,6 +84,17 @@ struct MelBand {
     weights: Vec<f32>,
 }
 
+/// The edges of the mel bands at `rate` (`BANDS + 2` of them, in Hz): band `b` rises
+/// from edge `b` to `b + 1` and falls to `b + 2`.
+fn band_edges(rate: f64) -> Vec<f64> {
+    let mel = |hz: f64| 2595.0 * (1.0 + hz / 700.0).log10();
+    let hz = |m: f64| 700.0 * (10f64.powf(m / 2595.0) - 1.0);
+    let (m0, m1) = (mel(LOW_HZ), mel(top_hz(rate)));
+    (0..BANDS + 2)
+        .map(|i| hz(m0 + (m1 - m0) * i as f64 / (BANDS + 1) as f64))
+        .collect()
+}
+
 /// Log-mel analysis shared by the matcher and the templates.
 pub(super) struct Analyzer {
     pub(super) win: usize,
@@ -94,8 +105,8 @@ pub(super) struct Analyzer {
     spectrum: Vec<Complex32>,
     scratch: Vec<Complex32>,
     bands: Vec<MelBand>,
-    /// See [`cepstrum_basis`].
-    pub(super) cepstrum: Vec<f32>,
+    /// The bands compared, every one until [`Analyzer::compare_under`] says otherwise.
+    pub(super) cepstrum: Cepstrum,
     /// The last frame's band powers (linear), for the onset stage.
     pub(super) power: Vec<f32>,
 }
@@ -112,13 +123,7 @@ impl Analyzer {
             })
             .collect();
         let bins = win / 2 + 1;
-        let mel = |hz: f64| 2595.0 * (1.0 + hz / 700.0).log10();
-        let hz = |m: f64| 700.0 * (10f64.powf(m / 2595.0) - 1.0);
-        let high = top_hz(rate);
-        let (m0, m1) = (mel(LOW_HZ), mel(high));
-        let edges: Vec<f64> = (0..BANDS + 2)
-            .map(|i| hz(m0 + (m1 - m0) * i as f64 / (BANDS + 1) as f64))
-            .collect();
+        let edges = band_edges(rate);
         let bin_hz = rate / win as f64;
         let bands = (0..BANDS)
             .map(|b| {
@@ -156,9 +161,15 @@ impl Analyzer {
             fft,
             window,
             bands,
-            cepstrum: cepstrum_basis(),
+            cepstrum: Cepstrum::full(),
             power: vec![0.0; BANDS],
         }
+    }
+
+    /// Compares only the bands wholly under `content_top_hz`, the highest frequency
+    /// the input (and every take) carries.
+    pub(super) fn compare_under(&mut self, rate: f64, content_top_hz: f64) {
+        self.cepstrum = Cepstrum::new(present_bands(rate, content_top_hz));
     }
 
     /// Samples in a frame's window at `rate`.
@@ -240,18 +251,80 @@ pub(super) const FEATURES: usize = BANDS;
 /// the method's threshold.
 const LIFTER_POWER: f32 = 0.5;
 
-/// The DCT-II rows that turn a pooled dB spectrum into weighted cepstral coefficients
-/// (`FEATURES` rows of `BANDS`; row 0, the mean level, is zero).
-pub(super) fn cepstrum_basis() -> Vec<f32> {
-    let mut basis = vec![0.0f32; FEATURES * BANDS];
-    for k in 1..FEATURES {
-        let weight = (k as f32).powf(LIFTER_POWER);
-        for i in 0..BANDS {
-            let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / BANDS as f64;
-            basis[k * BANDS + i] = weight * angle.cos() as f32;
+/// The comparison's view of a pooled spectrum: the weighted cepstral coefficients of
+/// its first `bands` mel bands, those the input carries (see [`present_bands`]). A
+/// band above what the input can carry holds only the resampler's leakage, 60 dB or
+/// more under the rest: every sound would share that cliff, look alike, and unlike a
+/// full-band take or the background's speech (a 16 kHz input, or one band-limited to
+/// 6.3 kHz: `docs/classify.md`, "An input that carries fewer bands").
+pub(super) struct Cepstrum {
+    /// `FEATURES` rows of `BANDS` (row 0, the mean level, and the rows from `bands` on
+    /// are zero; columns from `bands` on are zero).
+    basis: Vec<f32>,
+    bands: usize,
+}
+
+impl Cepstrum {
+    /// The DCT-II rows over the first `bands` bands (at least 2, at most `BANDS`).
+    pub(super) fn new(bands: usize) -> Self {
+        let bands = bands.clamp(2, BANDS);
+        let mut basis = vec![0.0f32; FEATURES * BANDS];
+        for k in 1..bands {
+            let weight = (k as f32).powf(LIFTER_POWER);
+            for i in 0..bands {
+                let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / bands as f64;
+                basis[k * BANDS + i] = weight * angle.cos() as f32;
+            }
         }
+        Self { basis, bands }
     }
-    basis
+
+    /// Every band.
+    pub(super) fn full() -> Self {
+        Self::new(BANDS)
+    }
+
+    /// The bands compared.
+    pub(super) fn bands(&self) -> usize {
+        self.bands
+    }
+
+    /// The features (unit norm) that `full` features, of a spectrum pooled over every
+    /// band, become when only this cepstrum's bands are compared: the spectrum is
+    /// recovered from them (up to its level and scale, which no feature keeps) and
+    /// taken through this cepstrum. Into `out`; the same features when every band is
+    /// compared. For models pooled over every band (the built-in background).
+    pub(super) fn refeature(&self, full: &[f32], out: &mut [f32]) {
+        if self.bands == BANDS {
+            out.copy_from_slice(full);
+            return;
+        }
+        // The inverse of the full DCT-II rows 1.. (orthogonal, of squared norm
+        // weight^2 BANDS / 2): the spectrum less its mean.
+        let mut spectrum = [0.0f32; BANDS];
+        for (k, &c) in full.iter().enumerate().take(FEATURES).skip(1) {
+            let weight = (k as f32).powf(LIFTER_POWER);
+            for (i, x) in spectrum.iter_mut().enumerate() {
+                let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / BANDS as f64;
+                *x += c * angle.cos() as f32 * 2.0 / (weight * BANDS as f32);
+            }
+        }
+        for (o, row) in out.iter_mut().zip(self.basis.chunks_exact(BANDS)) {
+            *o = row.iter().zip(&spectrum).map(|(w, x)| w * x).sum();
+        }
+        scale_to_unit(out);
+    }
+}
+
+/// How many of the mel bands at the working `rate` lie wholly under `content_top_hz`,
+/// the highest frequency the input carries (at least 2).
+pub(super) fn present_bands(rate: f64, content_top_hz: f64) -> usize {
+    let edges = band_edges(rate);
+    // A band is present when its top edge is; the rounding of the edges aside.
+    (0..BANDS)
+        .take_while(|&b| edges[b + 2] <= content_top_hz * (1.0 + 1e-9))
+        .count()
+        .max(2)
 }
 
 /// The mean power spectrum (linear) of `k` consecutive frames (each `BANDS` dB values,
@@ -278,17 +351,21 @@ pub(super) fn pool_power<'a>(k: usize, frame: impl Fn(usize) -> &'a [f32], out: 
 
 /// The features of a pooled power spectrum (from [`pool_power`]): in dB, floored
 /// `POOLED_RANGE_DB` under its loudest band, turned into weighted cepstral coefficients
-/// of unit norm (`basis` from [`cepstrum_basis`]), into `out`.
-pub(super) fn features_of_power(power: &[f32], basis: &[f32], out: &mut [f32]) {
+/// of unit norm over the bands `cepstrum` compares, into `out`.
+pub(super) fn features_of_power(power: &[f32], cepstrum: &Cepstrum, out: &mut [f32]) {
+    let bands = cepstrum.bands;
     let mut pooled = [0.0f32; BANDS];
-    for (d, p) in pooled.iter_mut().zip(power) {
+    for (d, p) in pooled.iter_mut().zip(power).take(bands) {
         *d = 10.0 * (p + 1e-12).log10();
     }
-    let loudest = pooled.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
-    for x in pooled.iter_mut() {
+    let loudest = pooled[..bands]
+        .iter()
+        .cloned()
+        .fold(f32::NEG_INFINITY, f32::max);
+    for x in pooled[..bands].iter_mut() {
         *x = x.max(loudest - POOLED_RANGE_DB);
     }
-    for (c, row) in out.iter_mut().zip(basis.chunks_exact(BANDS)) {
+    for (c, row) in out.iter_mut().zip(cepstrum.basis.chunks_exact(BANDS)) {
         *c = row.iter().zip(&pooled).map(|(w, x)| w * x).sum();
     }
     scale_to_unit(out);
@@ -355,12 +432,12 @@ mod tests {
     fn pool_features<'a>(
         k: usize,
         frame: impl Fn(usize) -> &'a [f32],
-        basis: &[f32],
+        cepstrum: &Cepstrum,
         out: &mut [f32],
     ) {
         let mut pooled = [0.0f32; BANDS];
         pool_power(k, frame, &mut pooled);
-        features_of_power(&pooled, basis, out);
+        features_of_power(&pooled, cepstrum, out);
     }
 
     const RATE: f64 = 22_050.0;
@@ -435,6 +512,56 @@ mod tests {
             "{}",
             similarity(&loud, &quiet)
         );
+    }
+
+    #[test]
+    fn the_bands_compared_are_those_wholly_under_what_the_input_carries() {
+        // At the working rate itself every band is carried.
+        assert_eq!(present_bands(RATE, top_hz(RATE)), BANDS);
+        assert_eq!(present_bands(RATE, top_hz(48_000.0)), BANDS);
+        // A 16 kHz input carries up to 6.3 kHz, an 8 kHz one up to 3.2 kHz.
+        for (input_rate, top) in [(16_000.0, 6_310.0), (8_000.0, 3_155.0)] {
+            let bands = present_bands(RATE, top_hz(input_rate));
+            assert!((top_hz(input_rate) - top).abs() < 10.0);
+            let edges = band_edges(RATE);
+            assert!(
+                edges[bands + 1] <= top && edges[bands + 2] > top,
+                "{input_rate}: {bands}"
+            );
+        }
+        assert_eq!(present_bands(RATE, 0.0), 2);
+    }
+
+    #[test]
+    fn features_over_every_band_give_those_over_fewer_bands() {
+        // A pooled spectrum with a shape over every band (its loudest within the first
+        // bands, nothing under the floor), its features over every band taken through
+        // the narrower cepstrum, equal the features of its first bands.
+        let power: Vec<f32> = (0..BANDS)
+            .map(|b| 10f32.powf((-0.8 * b as f32 + 6.0 * (b as f32 * 0.7).sin()) / 10.0))
+            .collect();
+        let full = Cepstrum::full();
+        let mut every = vec![0.0f32; FEATURES];
+        features_of_power(&power, &full, &mut every);
+        let mut again = vec![0.0f32; FEATURES];
+        full.refeature(&every, &mut again);
+        assert_eq!(again, every);
+        for bands in [28, 20, 5] {
+            let narrow = Cepstrum::new(bands);
+            let (mut direct, mut refeatured) = (vec![0.0f32; FEATURES], vec![0.0f32; FEATURES]);
+            features_of_power(&power, &narrow, &mut direct);
+            narrow.refeature(&every, &mut refeatured);
+            assert!(
+                similarity(&direct, &refeatured) > 0.9999,
+                "{bands} bands: {direct:?} against {refeatured:?}"
+            );
+            // What lies above the compared bands makes no difference.
+            let mut other = power.clone();
+            other[bands..].iter_mut().for_each(|p| *p *= 1e-4);
+            let mut without_top = vec![0.0f32; FEATURES];
+            features_of_power(&other, &narrow, &mut without_top);
+            assert_eq!(without_top, direct);
+        }
     }
 
     #[test]

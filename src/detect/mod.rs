@@ -258,7 +258,7 @@ impl Detector {
                 Matcher::Waveform(Box::new(WaveformMatcher::new(patterns, settings)))
             }
             Method::Spectral => {
-                let mut matcher = SpectralMatcher::new(patterns, settings);
+                let mut matcher = SpectralMatcher::new(patterns, settings, input_rate);
                 for (_, own) in own_background(settings)? {
                     matcher.add_background(&own);
                 }

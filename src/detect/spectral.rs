@@ -68,8 +68,8 @@ use super::enrol::{
     take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    features_of_power, normalise, pool_power, similarity, Analyzer, LowCut, BANDS, FEATURES,
-    HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, similarity, top_hz, Analyzer, LowCut, BANDS,
+    FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -203,7 +203,7 @@ pub(super) fn run_onset_stage(
 /// of its quiet, as the matcher with `settings` pools them: a background model
 /// (`examples/background_model.rs`).
 pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> BackgroundModel {
-    let mut matcher = SpectralMatcher::new(Vec::new(), settings);
+    let mut matcher = SpectralMatcher::new(Vec::new(), settings, settings.sample_rate);
     matcher.collected = Some(Vec::new());
     let mut out = Vec::new();
     matcher.push(samples, &mut out);
@@ -408,9 +408,21 @@ const CONTINUATION_DB: f64 = 6.0;
 const ALIKE_SIMILARITY: f32 = 0.7;
 
 impl SpectralMatcher {
-    pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings) -> Self {
+    /// A matcher of `patterns` for input recorded at `input_rate` (resampled to
+    /// `settings.sample_rate` before it arrives).
+    pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings, input_rate: u32) -> Self {
         let rate = f64::from(settings.sample_rate);
         let mut analyzer = Analyzer::new(rate);
+        // Only the bands that the input and every take carry are compared: those under
+        // where the resampler's passband ends at the lowest of their rates.
+        let lowest_rate = patterns
+            .iter()
+            .flat_map(|p| p.takes.iter().map(|t| t.recorded_rate))
+            .chain([input_rate, settings.sample_rate])
+            .min()
+            .unwrap_or(settings.sample_rate);
+        analyzer.compare_under(rate, top_hz(f64::from(lowest_rate)));
+        let compared_bands = analyzer.cepstrum.bands();
         let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
         // the onset (the onset frame is centred on it), shift tolerance included.
@@ -478,7 +490,8 @@ impl SpectralMatcher {
             for s in &mut sustain {
                 *s /= sustain_frames.max(1) as f32;
             }
-            normalise(&mut sustain);
+            sustain[compared_bands..].fill(0.0);
+            normalise(&mut sustain[..compared_bands]);
             infos.push(PatternInfo {
                 name: p.name.clone(),
                 kind: p.kind,
@@ -511,6 +524,9 @@ impl SpectralMatcher {
         } else {
             default_noise_over_floor(rate)
         };
+        let background = BackgroundModel::builtin()
+            .for_matcher(FEATURES, decision_frames)
+            .compared_on(&analyzer.cepstrum);
         let gates = GateParams {
             min_strength: settings.min_strength,
             ..GateParams::default()
@@ -567,7 +583,7 @@ impl SpectralMatcher {
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
-            background: BackgroundModel::builtin().for_matcher(FEATURES, decision_frames),
+            background,
             background_score: f32::NEG_INFINITY,
             separating,
             max_windows,
@@ -581,7 +597,9 @@ impl SpectralMatcher {
     /// sounds an onset is compared with besides the patterns. Called while the
     /// detector is built, never per block.
     pub fn add_background(&mut self, own: &BackgroundModel) {
-        self.background = self.background.joined(own);
+        self.background = self
+            .background
+            .joined(&own.clone().compared_on(&self.analyzer.cepstrum));
     }
 
     /// Keeps a record of every onset from now on (grows with the stream: offline).
@@ -1089,7 +1107,8 @@ impl SpectralMatcher {
         for shift in 0..=2 * MAX_SHIFT {
             let first = (onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64);
             self.pool_frames(first, windows * self.decision_frames);
-            self.room.hear(&self.instance_power);
+            self.room
+                .hear(&self.instance_power, self.analyzer.cepstrum.bands());
             for t in &self.templates {
                 let Some(i) = pair.iter().position(|&p| p == t.pattern) else {
                     continue;
@@ -1149,7 +1168,8 @@ impl SpectralMatcher {
         self.room.set(self.onsets.band_floors());
         for shift in 0..=2 * MAX_SHIFT {
             self.pool_instance((onset_frame + shift as u64).saturating_sub(MAX_SHIFT as u64));
-            self.room.hear(&self.instance_power);
+            self.room
+                .hear(&self.instance_power, self.analyzer.cepstrum.bands());
             for (ti, t) in self.templates.iter().enumerate() {
                 self.room.take(
                     &t.pooled_power,
@@ -1259,7 +1279,8 @@ impl SpectralMatcher {
         }
         self.pool_instance(onset_frame);
         self.room.set(self.onsets.band_floors());
-        self.room.hear(&self.instance_power);
+        self.room
+            .hear(&self.instance_power, self.analyzer.cepstrum.bands());
         let template = &self.templates[last.template];
         let energy = self.decision_window_energy(time_sample);
         for k in after.saturating_sub(slack).max(1)..=(after + slack).min(count) {
@@ -1329,11 +1350,12 @@ impl SpectralMatcher {
         };
         let info = &self.patterns[held.current()?.pattern];
         let slot = (f % self.frame_capacity as u64) as usize;
+        let bands = self.analyzer.cepstrum.bands();
         held.follow(
             f,
-            &self.frames[slot * BANDS..(slot + 1) * BANDS],
+            &self.frames[slot * BANDS..slot * BANDS + bands],
             self.levels[slot],
-            &info.sustain,
+            &info.sustain[..bands],
             info.continuous_threshold,
         )
     }
