@@ -6,8 +6,8 @@
 //! when a detector is built (on the thread that builds it), never per block.
 
 use super::features::{
-    features_of_power, pool_power, scale_to_unit, similarity, Analyzer, Cepstrum, BANDS, FEATURES,
-    HOP_SECONDS, WINDOW_SECONDS,
+    band_centres, band_top_hz, features_of_power, pool_power, scale_to_unit, similarity, Analyzer,
+    Cepstrum, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::onset::OnsetParams;
 use super::place::{first_window_within, Placer, ONSET_RANGE_DB, PLACE_AFTER_FRAMES};
@@ -284,6 +284,52 @@ pub(super) fn take_features(
     }
 }
 
+/// A fall of this much (dB) over [`CLIFF_BANDS`] bands of the takes' loudest frames is
+/// a filter's edge, not a sound's: three of the top mel bands span about a third of an
+/// octave, and 20 dB over it is 60 dB an octave, steeper than a voice, a knock or a
+/// microphone's own roll-off, but what a converter's anti-aliasing filter or a
+/// resampler does. Over the takes of every dev set, unheard voice and room the steepest
+/// fall above `CLIFF_LOWEST_HZ` is 15 dB (a synthetic voice's "ping"); low-passed at
+/// 6.3 kHz, 25 to 77 dB (`docs/classify.md`, "An input that carries fewer bands").
+const CLIFF_DB: f32 = 20.0;
+const CLIFF_BANDS: usize = 3;
+/// Falls under this are the sound's own: a "boom" may have nothing over a few hundred
+/// hertz. It is where an 8 kHz input's band ends, the narrowest one compared.
+const CLIFF_LOWEST_HZ: f64 = 3_000.0;
+
+/// The highest frequency the takes carry when they were band-limited on their way in
+/// (a 16 kHz source resampled to 48 kHz before it was saved): the top edge of the band
+/// where the first cliff ([`CLIFF_DB`]) of their loudest frames, band by band over every
+/// take, begins (the bands on the cliff are the filter's transition); infinite when
+/// there is none. The input a take was recorded through is the one
+/// its user performs through, so the stream is taken to carry no more.
+pub(super) fn takes_carry_under_hz<'a>(
+    analyzer: &mut Analyzer,
+    takes: impl IntoIterator<Item = &'a [f32]>,
+    rate: f64,
+) -> f64 {
+    let (win, hop) = (analyzer.win, analyzer.hop);
+    let mut loudest = [f32::NEG_INFINITY; BANDS];
+    let mut frame = [0.0f32; BANDS];
+    for take in takes {
+        let mut start = 0;
+        while start + win <= take.len() {
+            analyzer.frame(&take[start..start + win], &mut frame);
+            // The bands' own powers: the frame's dB are floored under its loudest band.
+            for (l, p) in loudest.iter_mut().zip(&analyzer.power) {
+                *l = l.max(10.0 * (p + 1e-20).log10());
+            }
+            start += hop;
+        }
+    }
+    let centres = band_centres(rate);
+    (CLIFF_BANDS..BANDS)
+        .find(|&b| {
+            centres[b] >= CLIFF_LOWEST_HZ && loudest[b] < loudest[b - CLIFF_BANDS] - CLIFF_DB
+        })
+        .map_or(f64::INFINITY, |b| band_top_hz(rate, b - CLIFF_BANDS))
+}
+
 /// Enrolment's quiet room lies this far (dB) under a take's quietest 5 ms, so that
 /// every part of the take stands out of its noise (`take_onsets`).
 const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
@@ -440,6 +486,36 @@ mod tests {
                 amplitude * ((2.0 * std::f64::consts::PI * hz * t).sin() * (-t / 0.08).exp()) as f32
             })
             .collect()
+    }
+
+    #[test]
+    fn takes_band_limited_on_their_way_in_carry_only_their_band() {
+        let rate = f64::from(settings().sample_rate);
+        let mut analyzer = Analyzer::new(rate);
+        let hiss = white_noise(4096, 0.3, 7);
+        let boom = tone(rate, 150.0, 120.0, 0.5);
+        // A full band, a low sound alone (its spectrum falls, but as a sound does), and
+        // both at 16 kHz brought back to the working rate: cut where the 16 kHz
+        // resampler's passband ends.
+        assert_eq!(
+            takes_carry_under_hz(&mut analyzer, [&hiss[..], &boom[..]], rate),
+            f64::INFINITY
+        );
+        assert_eq!(
+            takes_carry_under_hz(&mut analyzer, [&boom[..]], rate),
+            f64::INFINITY
+        );
+        let narrow = |x: &[f32]| {
+            let at_16_khz = crate::audio::resample_clip(x, rate as u32, 16_000).unwrap();
+            crate::audio::resample_clip(&at_16_khz, 16_000, rate as u32).unwrap()
+        };
+        let (hiss, boom) = (narrow(&hiss), narrow(&boom));
+        let carried = takes_carry_under_hz(&mut analyzer, [&hiss[..], &boom[..]], rate);
+        let passband = crate::audio::resampler_passband() * 8_000.0;
+        assert!(
+            (passband..passband + 1_000.0).contains(&carried),
+            "{carried} Hz, passband to {passband} Hz"
+        );
     }
 
     #[test]

@@ -95,6 +95,16 @@ fn band_edges(rate: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The centre of each mel band at `rate`, in Hz.
+pub(super) fn band_centres(rate: f64) -> Vec<f64> {
+    band_edges(rate)[1..=BANDS].to_vec()
+}
+
+/// The top edge of band `b` at `rate`, in Hz.
+pub(super) fn band_top_hz(rate: f64, b: usize) -> f64 {
+    band_edges(rate)[b.min(BANDS - 1) + 2]
+}
+
 /// Log-mel analysis shared by the matcher and the templates.
 pub(super) struct Analyzer {
     pub(super) win: usize,

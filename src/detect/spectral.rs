@@ -65,7 +65,8 @@ use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
 use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
 use super::enrol::{
     first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
-    take_onsets, window_power, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+    take_onsets, takes_carry_under_hz, window_power, TakeFeatures, Template,
+    SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
     features_of_power, normalise, pool_power, similarity, top_hz, Analyzer, LowCut, BANDS,
@@ -421,7 +422,12 @@ impl SpectralMatcher {
             .chain([input_rate, settings.sample_rate])
             .min()
             .unwrap_or(settings.sample_rate);
-        analyzer.compare_under(rate, top_hz(f64::from(lowest_rate)));
+        let takes = patterns
+            .iter()
+            .flat_map(|p| &p.takes)
+            .map(|t| &t.samples[..]);
+        let carried = takes_carry_under_hz(&mut analyzer, takes, rate);
+        analyzer.compare_under(rate, top_hz(f64::from(lowest_rate)).min(carried));
         let compared_bands = analyzer.cepstrum.bands();
         let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
