@@ -81,6 +81,14 @@ pub fn analyze_file_with(
         .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let mut source = WavSource::open(recording, select).map_err(AnalyzeError::Recording)?;
     let mut detector = Detector::new(patterns, &config.detector, source.sample_rate())?;
+    if let Some(top_hz) = detector.compared_top_hz() {
+        tracing::info!(
+            recording = %recording.display(),
+            rate = source.sample_rate(),
+            top_hz = top_hz.round(),
+            "the recording or the takes carry less than the full band: only the bands under top_hz are compared"
+        );
+    }
     if keep.scores {
         detector.enable_score_trace();
     }

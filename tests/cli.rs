@@ -721,7 +721,7 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     let out = same_twice("waveform");
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(!stderr(&out).contains("warning:"), "{}", stderr(&out));
-    // The example's four sounds are told apart.
+    // The example's four sounds are told apart, over every band.
     let out = onomato(&[
         "check",
         "--config",
@@ -730,6 +730,34 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
         "spectral",
     ]);
     assert!(!stderr(&out).contains("warning:"), "{}", stderr(&out));
+    assert!(
+        !stderr(&out).contains("carry sound up to"),
+        "{}",
+        stderr(&out)
+    );
+    // A take recorded at 16 kHz carries sound up to where the resampler's passband ends
+    // there, and only the bands under it are compared.
+    let dir = temp_dir("check-narrow");
+    let mut source =
+        onomato::audio::WavSource::open(&root().join(tick), onomato::audio::ChannelSelect::Mix)
+            .unwrap();
+    let rate = source.sample_rate();
+    let narrow = onomato::audio::resample_clip(&source.read_all().unwrap(), rate, 16_000).unwrap();
+    let narrow_tick = dir.join("tick-16k.wav");
+    common::write_wav_f32(&narrow_tick, &narrow, 16_000);
+    let out = onomato(&[
+        "check",
+        "-p",
+        &format!("tick={}", narrow_tick.display()),
+        "-p",
+        &format!("boom={boom}"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("the takes carry sound up to 6.3 kHz"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]

@@ -365,8 +365,16 @@ fn load_lane_patterns(config: &Config) -> anyhow::Result<Vec<Vec<Pattern>>> {
 /// One performer's detector at `rate` and the channel it hears; `lane`: its config
 /// (see [`Config::lanes`]).
 fn lane_detector(lane: &Config, patterns: &[Pattern], rate: u32) -> anyhow::Result<LaneDetector> {
+    let detector = Detector::new(patterns.to_vec(), &lane.detector, rate)?;
+    if let Some(top_hz) = detector.compared_top_hz() {
+        tracing::info!(
+            rate,
+            top_hz = top_hz.round(),
+            "the input or the takes carry less than the full band: only the bands under top_hz are compared"
+        );
+    }
     Ok(LaneDetector {
-        detector: Detector::new(patterns.to_vec(), &lane.detector, rate)?,
+        detector,
         select: lane
             .detector
             .channel

@@ -304,6 +304,16 @@ impl Detector {
         }
     }
 
+    /// Spectral method: the top of the highest band compared, in Hz, when the input or
+    /// the takes carry less than every band (a 16 kHz input; takes band-limited on their
+    /// way in); `None` when every band is, and for the waveform method.
+    pub fn compared_top_hz(&self) -> Option<f64> {
+        match &self.matcher {
+            Matcher::Waveform(_) => None,
+            Matcher::Spectral(m) => m.compared_top_hz(),
+        }
+    }
+
     /// Longest time from an impulse's onset to its decision (`emitted_at - time`),
     /// seconds, resampling included. Held sounds end later: by the gap that ends them.
     pub fn decision_delay_bound(&self) -> f64 {

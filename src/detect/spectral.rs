@@ -69,8 +69,8 @@ use super::enrol::{
     SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    features_of_power, normalise, pool_power, similarity, top_hz, Analyzer, LowCut, BANDS,
-    FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    band_top_hz, features_of_power, normalise, pool_power, similarity, top_hz, Analyzer, LowCut,
+    BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -616,6 +616,13 @@ impl SpectralMatcher {
     /// Hands over the records kept since [`Self::enable_explain`].
     pub fn take_explain(&mut self) -> Option<Vec<OnsetRecord>> {
         self.explain.as_mut().map(std::mem::take)
+    }
+
+    /// The top of the highest band compared, in Hz, when the input or the takes carry
+    /// less than every band ([`Analyzer::compare_under`]); `None` when every band is.
+    pub fn compared_top_hz(&self) -> Option<f64> {
+        let bands = self.analyzer.cepstrum.bands();
+        (bands < BANDS).then(|| band_top_hz(self.rate, bands - 1))
     }
 
     /// Pairs of patterns whose takes resemble each other over the decision window at
