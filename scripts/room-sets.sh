@@ -9,6 +9,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -21,10 +22,12 @@
 # 16 kHz); with `sequences`, the sequences alone, the takes left as they were recorded
 # (enrolled through one microphone, heard through another).
 # lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
-# resampled to a full rate on its way in). All repeatable (sox -R).
+# resampled to a full rate on its way in).
+# gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
+# (an input gain set too high). All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -85,7 +88,13 @@ case $kind in
         esac
         added="every file low-passed at $top_hz Hz"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate or lowpass" >&2; exit 2 ;;
+    gain)
+        [ $# -eq 1 ] || usage
+        gain_db=$1
+        [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
+        added="every file at $gain_db dB, clipped at full scale"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass or gain" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -103,6 +112,8 @@ for set in "$src"/*/; do
         rel=${wav#"$set"/}
         if [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
+        elif [ "$kind" = gain ]; then
+            sox -R -V1 "$wav" -b 16 "$out/$name/$rel" gain "$gain_db"
         elif [ "$kind" = lowpass ]; then
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$top_hz"
         elif [ "$kind" = rate ]; then

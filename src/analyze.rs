@@ -121,6 +121,13 @@ pub fn analyze_file_with(
             "samples that were not numbers (taken as 0) or beyond full scale (clamped) were replaced"
         );
     }
+    if detector.clipped_samples() > 0 {
+        tracing::warn!(
+            recording = %recording.display(),
+            samples = detector.clipped_samples(),
+            "the recording clips: samples reached full scale, and a clipped sound's spectrum is not its take's; record with less gain"
+        );
+    }
     tracing::info!(
         recording = %recording.display(),
         seconds = frames as f64 / f64::from(source.sample_rate()),

@@ -248,6 +248,11 @@ impl WavSource {
 /// Input frames per resampler chunk: decisions can be taken this often (1.5 ms at
 /// 44.1 kHz), so the chunk adds little latency.
 pub(crate) const RESAMPLER_CHUNK: usize = 64;
+
+/// A sample this close to full scale is clipped (a 16-bit sample within 33 steps of
+/// it): the input's gain was too high for the sound, whose spectrum is then no longer
+/// its take's.
+pub const CLIP_LEVEL: f32 = 0.999;
 /// Length of the resampler's windowed-sinc filter. Its delay, half of it, is removed
 /// from the output; 128 taps cost about 1.5 ms of latency at 44.1 kHz.
 pub(crate) const RESAMPLER_SINC_LEN: usize = 128;

@@ -35,8 +35,6 @@ const JOIN_GAP_SECONDS: f64 = 0.2;
 const PAD_SECONDS: f64 = 0.01;
 /// A take must be at least this long.
 const MIN_TAKE_SECONDS: f64 = 0.02;
-/// A sample this close to full scale is clipped.
-const CLIP_LEVEL: f32 = 0.999;
 
 /// A sound found in a recording, in samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,7 +123,7 @@ pub fn find_takes(samples: &[f32], rate: u32, max_seconds: f64) -> Vec<FoundTake
             let seconds = (end - start) as f64 / f64::from(rate);
             let clipped = samples[start..end]
                 .iter()
-                .position(|x| x.abs() >= CLIP_LEVEL);
+                .position(|x| x.abs() >= crate::audio::CLIP_LEVEL);
             let verdict = if let Some(k) = clipped {
                 Err(Refusal::Clipped {
                     at: (start + k) as f64 / f64::from(rate),

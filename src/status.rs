@@ -10,6 +10,7 @@ pub struct Status {
     pub(crate) stream_samples: AtomicU64,
     pub(crate) captured_frames: AtomicU64,
     pub(crate) bad_samples: AtomicU64,
+    pub(crate) clipped_samples: AtomicU64,
     pub(crate) input_rate: AtomicU32,
     pub(crate) overrun_samples: AtomicU64,
     pub(crate) dropped_events: AtomicU64,
@@ -42,6 +43,10 @@ impl Status {
     /// scale (clamped).
     pub fn bad_samples(&self) -> u64 {
         self.bad_samples.load(Ordering::Relaxed)
+    }
+    /// Input samples that reached full scale (clipped): the input gain is too high.
+    pub fn clipped_samples(&self) -> u64 {
+        self.clipped_samples.load(Ordering::Relaxed)
     }
     /// Samples the capture could not put in the ring.
     pub fn overrun_samples(&self) -> u64 {

@@ -1,7 +1,8 @@
 //! Corrupt input: bursts of NaN or of samples far beyond full scale, as a float device or
 //! a damaged stream can deliver, must not deafen the detector. Regression test named
 //! after the failure: a 10 ms burst of NaN or of ±1e20, 0.2 s into the bundled example,
-//! made the spectral method miss every sound of the next 3 s.
+//! made the spectral method miss every sound of the next 3 s. And input that clips (a
+//! gain set too high) is counted and warned of.
 
 mod common;
 
@@ -110,4 +111,63 @@ fn analyze_and_listen_report_the_samples_they_replaced() {
     let log = String::from_utf8_lossy(&listened.stderr);
     assert!(log.contains("were replaced"), "{log}");
     assert!(log.contains(&format!("bad_samples={burst}")), "{log}");
+}
+
+/// A recording whose input gain was too high clips: its samples at full scale are
+/// counted (not replaced: they are numbers within range) and warned of by `analyze` and
+/// `listen`, which name the remedy.
+#[test]
+fn clipped_samples_are_counted_and_warned_of() {
+    let (config, clean, rate) = example();
+    let loud: Vec<f32> = clean.iter().map(|x| (x * 4.0).clamp(-1.0, 1.0)).collect();
+    let at_full_scale = loud
+        .iter()
+        .filter(|x| x.abs() >= onomato::audio::CLIP_LEVEL)
+        .count() as u64;
+    assert!(at_full_scale > 100, "{at_full_scale}");
+    let patterns = load_patterns(&config.patterns, &config.detector).unwrap();
+    let mut det = Detector::new(patterns.clone(), &config.detector, rate).unwrap();
+    detect_in_blocks(&mut det, &loud, 256);
+    assert_eq!(
+        (det.bad_samples(), det.clipped_samples()),
+        (0, at_full_scale)
+    );
+    let mut det = Detector::new(patterns, &config.detector, rate).unwrap();
+    detect_in_blocks(&mut det, &clean, 256);
+    assert_eq!(det.clipped_samples(), 0);
+
+    let dir = common::temp_dir("clipped-cli");
+    let wav = dir.join("clipped.wav");
+    common::write_wav_f32(&wav, &loud, rate);
+    let bin = env!("CARGO_BIN_EXE_onomato");
+    let analyzed = std::process::Command::new(bin)
+        .args(["analyze"])
+        .arg(&wav)
+        .args(["-c", "config/onomato.toml", "--format", "json"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(analyzed.status.success());
+    let log = String::from_utf8_lossy(&analyzed.stderr);
+    assert!(
+        log.contains("the recording clips")
+            && log.contains("less gain")
+            && log.contains(&format!("samples={at_full_scale}")),
+        "{log}"
+    );
+    let listened = std::process::Command::new(bin)
+        .args(["listen", "-c", "config/onomato.toml", "--input"])
+        .arg(&wav)
+        .args(["--speed", "20", "--print", "none", "--osc", "127.0.0.1:9"])
+        .env("RUST_LOG", "info")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(listened.status.success());
+    let log = String::from_utf8_lossy(&listened.stderr);
+    assert!(log.contains("the input clips"), "{log}");
+    assert!(
+        log.contains(&format!("clipped_samples={at_full_scale}")),
+        "{log}"
+    );
 }

@@ -68,8 +68,10 @@ pub struct DetectorStage {
     /// cut-off waits here instead of blocking detection, and the events after it wait
     /// behind it (at most `BACKLOG` of them; more are dropped and counted).
     backlog: VecDeque<OutputMessage>,
-    /// Bad samples counted by detectors that were replaced (reload, new input).
+    /// Bad and clipped samples counted by detectors that were replaced (reload, new
+    /// input).
     bad_samples_before: u64,
+    clipped_samples_before: u64,
     status: Arc<Status>,
 }
 
@@ -112,6 +114,7 @@ impl DetectorStage {
             sender,
             backlog: VecDeque::with_capacity(BACKLOG + 2),
             bad_samples_before: 0,
+            clipped_samples_before: 0,
             status,
         }
     }
@@ -132,6 +135,7 @@ impl DetectorStage {
         debug_assert_eq!(first.len(), samples);
         let mut loudest = 0.0f32;
         let mut bad = self.bad_samples_before;
+        let mut clipped = self.clipped_samples_before;
         for (index, lane) in self.lanes.iter_mut().enumerate() {
             lane.mono.clear();
             let mut peak = 0.0f32;
@@ -149,11 +153,15 @@ impl DetectorStage {
             }
             lane.detector.process(&lane.mono, &mut lane.events);
             bad += lane.detector.bad_samples();
+            clipped += lane.detector.clipped_samples();
         }
         self.status
             .level_db_bits
             .store(peak_db(loudest).to_bits(), Ordering::Relaxed);
         self.status.bad_samples.store(bad, Ordering::Relaxed);
+        self.status
+            .clipped_samples
+            .store(clipped, Ordering::Relaxed);
         let first = &self.lanes[0].detector;
         self.status.stream_samples.store(
             (first.stream_seconds() * f64::from(first.input_rate())).round() as u64,
@@ -268,6 +276,7 @@ impl DetectorStage {
         let old = std::mem::take(&mut self.lanes);
         for l in &old {
             self.bad_samples_before += l.detector.bad_samples();
+            self.clipped_samples_before += l.detector.clipped_samples();
         }
         self.lanes = new
             .into_iter()
@@ -284,6 +293,7 @@ impl DetectorStage {
         let old = &self.lanes[index];
         l.detector.continue_after(&old.detector);
         self.bad_samples_before += old.detector.bad_samples();
+        self.clipped_samples_before += old.detector.clipped_samples();
         self.status
             .input_rate
             .store(l.detector.input_rate(), Ordering::Relaxed);
@@ -422,7 +432,15 @@ fn log_bad_samples(new: u64, total: u64) {
     );
 }
 
-/// Replaced input samples are logged at most this often.
+fn log_clipped_samples(new: u64, total: u64) {
+    tracing::warn!(
+        new,
+        total,
+        "the input clips: samples reached full scale, and a clipped sound's spectrum is not its take's; lower the input gain"
+    );
+}
+
+/// Replaced and clipped input samples are each logged at most this often.
 const BAD_SAMPLES_LOG_EVERY: Duration = Duration::from_secs(60);
 
 /// How long the capture may deliver nothing before it is opened again.
@@ -674,6 +692,8 @@ pub fn listen(
     let mut failure: Option<&str> = None;
     let mut bad_logged = 0u64;
     let mut last_bad_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
+    let mut clipped_logged = 0u64;
+    let mut last_clipped_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
     loop {
         let message = match control_rx.recv_timeout(Duration::from_secs(1)) {
             Ok(m) => Some(m),
@@ -754,6 +774,12 @@ pub fn listen(
             bad_logged = bad;
             last_bad_log = std::time::Instant::now();
         }
+        let clipped = status.clipped_samples();
+        if clipped > clipped_logged && last_clipped_log.elapsed() >= BAD_SAMPLES_LOG_EVERY {
+            log_clipped_samples(clipped - clipped_logged, clipped);
+            clipped_logged = clipped;
+            last_clipped_log = std::time::Instant::now();
+        }
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
             if let Some((new_rate, new_channels, consumer)) = mic.reopen(&config) {
@@ -774,6 +800,12 @@ pub fn listen(
     let _ = detector_thread.join();
     if status.bad_samples() > bad_logged {
         log_bad_samples(status.bad_samples() - bad_logged, status.bad_samples());
+    }
+    if status.clipped_samples() > clipped_logged {
+        log_clipped_samples(
+            status.clipped_samples() - clipped_logged,
+            status.clipped_samples(),
+        );
     }
     drop(command_tx);
     // The detector thread sent Stop after its last event.
@@ -812,6 +844,7 @@ pub fn listen(
         printed_lines_dropped = report.output.print_dropped,
         preview_streams_closed = report.output.preview_closed,
         bad_samples = status.bad_samples(),
+        clipped_samples = status.clipped_samples(),
         "stopped"
     );
     if let Some(why) = failure {

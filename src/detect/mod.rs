@@ -233,6 +233,8 @@ pub struct Detector {
     clean: Vec<f32>,
     /// Samples that were not finite or beyond full scale.
     bad_samples: u64,
+    /// Samples at full scale, or clamped to it ([`crate::audio::CLIP_LEVEL`]).
+    clipped_samples: u64,
 }
 
 /// Samples are taken in pieces of this many to be sanitised.
@@ -281,6 +283,7 @@ impl Detector {
             open_ids,
             clean: vec![0.0; CLEAN_BLOCK],
             bad_samples: 0,
+            clipped_samples: 0,
         })
     }
 
@@ -401,6 +404,12 @@ impl Detector {
         self.bad_samples
     }
 
+    /// Samples that reached full scale so far (clipped, or clamped to it): the input's
+    /// gain is too high for its loudest sounds.
+    pub fn clipped_samples(&self) -> u64 {
+        self.clipped_samples
+    }
+
     /// Consumes one block of mono input and appends the events decided meanwhile.
     /// Samples that are not finite become 0 and samples beyond full scale are clamped
     /// to ±1 before anything else sees them: no state of the detector (resampler,
@@ -414,6 +423,7 @@ impl Detector {
             matcher,
             clean,
             bad_samples,
+            clipped_samples,
             ..
         } = self;
         for piece in block.chunks(CLEAN_BLOCK) {
@@ -426,6 +436,9 @@ impl Detector {
                 };
                 if *c != x {
                     *bad_samples += 1;
+                }
+                if c.abs() >= crate::audio::CLIP_LEVEL {
+                    *clipped_samples += 1;
                 }
             }
             match resampler {

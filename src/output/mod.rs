@@ -628,6 +628,7 @@ fn status_json(status: &Status, report: &OutputReport, sinks: &Sinks, p: &Previe
         "overrun_samples": status.overrun_samples(),
         "level_db": status.level_db(),
         "bad_samples": status.bad_samples(),
+        "clipped_samples": status.clipped_samples(),
         "xruns": status.xruns(),
         "late_bounce_hits": late,
         "preview_closed": p.closed_slow(),
