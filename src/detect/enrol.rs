@@ -2,8 +2,9 @@
 //! onsets against. A take's onset is placed where a stream would place it (the
 //! features, onset and placement stages run on the take after noise, as the matcher
 //! runs them on a stream), and its features are those the features stage gives a
-//! stream at that onset. Runs
-//! when a detector is built (on the thread that builds it), never per block.
+//! stream at that onset. The takes also tell how far up their input carries sound
+//! ([`takes_carry_under_hz`]). Runs when a detector is built (on the thread that builds
+//! it), never per block.
 
 use super::features::{
     band_centres, band_top_hz, features_of_power, pool_power, scale_to_unit, similarity, Analyzer,

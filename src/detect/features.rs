@@ -9,7 +9,8 @@
 //! band. Features: the frames of a decision window pooled into one mean power
 //! spectrum, in dB, floored 50 dB below its loudest band, turned into cepstral
 //! coefficients weighted towards the finer shape of the spectrum, of unit norm; two
-//! sounds are compared by the cosine of their features.
+//! sounds are compared by the cosine of their features. Only the bands that the input
+//! and every take carry are compared ([`Cepstrum`]).
 
 use std::sync::Arc;
 

@@ -619,7 +619,7 @@ impl SpectralMatcher {
     }
 
     /// The top of the highest band compared, in Hz, when the input or the takes carry
-    /// less than every band ([`Analyzer::compare_under`]); `None` when every band is.
+    /// less than every band (`features::Analyzer::compare_under`); `None` when every band is.
     pub fn compared_top_hz(&self) -> Option<f64> {
         let bands = self.analyzer.cepstrum.bands();
         (bands < BANDS).then(|| band_top_hz(self.rate, bands - 1))
