@@ -287,10 +287,10 @@ pub(super) fn take_features(
 
 /// A fall of this much (dB) over [`CLIFF_BANDS`] bands of the takes' loudest frames is
 /// a filter's edge, not a sound's: three of the top mel bands span about a third of an
-/// octave, and 20 dB over it is 60 dB an octave, steeper than a voice, a knock or a
-/// microphone's own roll-off, but what a converter's anti-aliasing filter or a
+/// octave, and 20 dB over it is over 50 dB an octave, steeper than a voice, a knock or
+/// a microphone's own roll-off, but what a converter's anti-aliasing filter or a
 /// resampler does. Over the takes of every dev set, unheard voice and room the steepest
-/// fall above `CLIFF_LOWEST_HZ` is 15 dB (a synthetic voice's "ping"); low-passed at
+/// fall above `CLIFF_LOWEST_HZ` is 16 dB (synthetic words, knocks); low-passed at
 /// 6.3 kHz, 25 to 77 dB (`docs/classify.md`, "An input that carries fewer bands").
 const CLIFF_DB: f32 = 20.0;
 const CLIFF_BANDS: usize = 3;
