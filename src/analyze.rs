@@ -46,6 +46,9 @@ pub struct Analysis {
     pub working_rate: u32,
     /// Spectral method, when asked for: every onset considered and what became of it.
     pub onsets: Option<Vec<OnsetRecord>>,
+    /// Spectral method: the top of the bands compared (Hz) when the recording or the
+    /// takes carry less than the full band.
+    pub compared_top_hz: Option<f64>,
 }
 
 /// What an analysis keeps besides the events.
@@ -140,6 +143,7 @@ pub fn analyze_file_with(
         sample_rate: source.sample_rate(),
         score_traces: detector.take_score_trace(),
         onsets: detector.take_explain(),
+        compared_top_hz: detector.compared_top_hz(),
         thresholds,
         working_rate: config.detector.sample_rate,
     })

@@ -440,6 +440,13 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         crate::plot::write_svg(path, &samples, &analysis)?;
     }
     if args.explain {
+        if let Some(top_hz) = analysis.compared_top_hz {
+            let _ = writeln!(
+                std::io::stderr().lock(),
+                "only the bands under {:.1} kHz are compared: the recording or the takes carry no more",
+                top_hz / 1000.0
+            );
+        }
         match &analysis.onsets {
             Some(onsets) => analyze::write_explain(&mut std::io::stderr().lock(), onsets)
                 .context("cannot write to stderr")?,

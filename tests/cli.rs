@@ -758,6 +758,20 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
         "{}",
         stderr(&out)
     );
+    // `analyze --explain` says so above its table.
+    let out = onomato(&[
+        "analyze",
+        &narrow_tick.display().to_string(),
+        "-p",
+        &format!("tick={}", narrow_tick.display()),
+        "--explain",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).starts_with("only the bands under 6.3 kHz are compared"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]
