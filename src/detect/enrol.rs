@@ -302,8 +302,8 @@ const CLIFF_LOWEST_HZ: f64 = 3_000.0;
 /// (a 16 kHz source resampled to 48 kHz before it was saved): the top edge of the band
 /// where the first cliff ([`CLIFF_DB`]) of their loudest frames, band by band over every
 /// take, begins (the bands on the cliff are the filter's transition); infinite when
-/// there is none. The input a take was recorded through is the one
-/// its user performs through, so the stream is taken to carry no more.
+/// there is none. The input a take was recorded through is the one its user performs
+/// through, so the stream is taken to carry no more.
 pub(super) fn takes_carry_under_hz<'a>(
     analyzer: &mut Analyzer,
     takes: impl IntoIterator<Item = &'a [f32]>,
