@@ -6,6 +6,8 @@
 
 mod common;
 
+use std::process::{Command, Output};
+
 use common::root;
 use onomato::analyze::detect_in_blocks;
 use onomato::audio::{ChannelSelect, WavSource};
@@ -70,6 +72,34 @@ fn a_10_ms_burst_of_nan_or_out_of_range_samples_costs_no_sound_0_3_s_after_it() 
     }
 }
 
+/// `signal` written as a float WAV named `name`, then run through `analyze` (JSON) and
+/// `listen` (replayed at 20x, info log) with the bundled config: both outputs, each
+/// asserted to have succeeded.
+fn analyze_and_listen(name: &str, signal: &[f32], rate: u32) -> (Output, Output) {
+    let dir = common::temp_dir(name);
+    let wav = dir.join(format!("{name}.wav"));
+    common::write_wav_f32(&wav, signal, rate);
+    let bin = env!("CARGO_BIN_EXE_onomato");
+    let analyzed = Command::new(bin)
+        .args(["analyze"])
+        .arg(&wav)
+        .args(["-c", "config/onomato.toml", "--format", "json"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(analyzed.status.success());
+    let listened = Command::new(bin)
+        .args(["listen", "-c", "config/onomato.toml", "--input"])
+        .arg(&wav)
+        .args(["--speed", "20", "--print", "none", "--osc", "127.0.0.1:9"])
+        .env("RUST_LOG", "info")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(listened.status.success());
+    (analyzed, listened)
+}
+
 /// The same burst in a float WAV file, through `analyze` and `listen`: the sounds are
 /// found and the replaced samples are counted and named in the log.
 #[test]
@@ -80,18 +110,7 @@ fn analyze_and_listen_report_the_samples_they_replaced() {
     for x in &mut signal[at..at + burst] {
         *x = f32::NAN;
     }
-    let dir = common::temp_dir("bad-samples-cli");
-    let wav = dir.join("nan-burst.wav");
-    common::write_wav_f32(&wav, &signal, rate);
-    let bin = env!("CARGO_BIN_EXE_onomato");
-    let analyzed = std::process::Command::new(bin)
-        .args(["analyze"])
-        .arg(&wav)
-        .args(["-c", "config/onomato.toml", "--format", "json"])
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(analyzed.status.success());
+    let (analyzed, listened) = analyze_and_listen("bad-samples-cli", &signal, rate);
     let log = String::from_utf8_lossy(&analyzed.stderr);
     assert!(
         log.contains("were replaced") && log.contains(&format!("samples={burst}")),
@@ -99,15 +118,6 @@ fn analyze_and_listen_report_the_samples_they_replaced() {
     );
     let json: serde_json::Value = serde_json::from_slice(&analyzed.stdout).unwrap();
     assert!(json["events"].as_array().unwrap().len() >= 13, "{json}");
-    let listened = std::process::Command::new(bin)
-        .args(["listen", "-c", "config/onomato.toml", "--input"])
-        .arg(&wav)
-        .args(["--speed", "20", "--print", "none", "--osc", "127.0.0.1:9"])
-        .env("RUST_LOG", "info")
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(listened.status.success());
     let log = String::from_utf8_lossy(&listened.stderr);
     assert!(log.contains("were replaced"), "{log}");
     assert!(log.contains(&format!("bad_samples={burst}")), "{log}");
@@ -136,18 +146,7 @@ fn clipped_samples_are_counted_and_warned_of() {
     detect_in_blocks(&mut det, &clean, 256);
     assert_eq!(det.clipped_samples(), 0);
 
-    let dir = common::temp_dir("clipped-cli");
-    let wav = dir.join("clipped.wav");
-    common::write_wav_f32(&wav, &loud, rate);
-    let bin = env!("CARGO_BIN_EXE_onomato");
-    let analyzed = std::process::Command::new(bin)
-        .args(["analyze"])
-        .arg(&wav)
-        .args(["-c", "config/onomato.toml", "--format", "json"])
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(analyzed.status.success());
+    let (analyzed, listened) = analyze_and_listen("clipped-cli", &loud, rate);
     let log = String::from_utf8_lossy(&analyzed.stderr);
     assert!(
         log.contains("the recording clips")
@@ -155,15 +154,6 @@ fn clipped_samples_are_counted_and_warned_of() {
             && log.contains(&format!("samples={at_full_scale}")),
         "{log}"
     );
-    let listened = std::process::Command::new(bin)
-        .args(["listen", "-c", "config/onomato.toml", "--input"])
-        .arg(&wav)
-        .args(["--speed", "20", "--print", "none", "--osc", "127.0.0.1:9"])
-        .env("RUST_LOG", "info")
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(listened.status.success());
     let log = String::from_utf8_lossy(&listened.stderr);
     assert!(log.contains("the input clips"), "{log}");
     assert!(
