@@ -17,7 +17,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use super::features::{Cepstrum, BANDS};
+use super::features::{Cepstrum, BANDS, FEATURES};
 
 /// The built-in model (see the module comment).
 const BUILTIN: &[u8] = include_bytes!("background.bin");
@@ -89,13 +89,8 @@ impl BackgroundModel {
         if cepstrum.bands() == BANDS || self.is_empty() {
             return self;
         }
-        let mut templates = vec![0.0f32; self.templates.len()];
-        for (out, full) in templates
-            .chunks_exact_mut(self.features)
-            .zip(self.templates.chunks_exact(self.features))
-        {
-            cepstrum.refeature(full, out);
-        }
+        debug_assert_eq!(self.features, FEATURES, "a model pooled as a matcher pools");
+        let templates = cepstrum.refeature(&self.templates);
         Self::new(self.features, self.decision_frames, templates)
     }
 

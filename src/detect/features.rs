@@ -300,30 +300,43 @@ impl Cepstrum {
         self.bands
     }
 
-    /// The features (unit norm) that `full` features, of a spectrum pooled over every
-    /// band, become when only this cepstrum's bands are compared: the spectrum is
-    /// recovered from them (up to its level and scale, which no feature keeps) and
-    /// taken through this cepstrum. Into `out`; the same features when every band is
-    /// compared. For models pooled over every band (the built-in background).
-    pub(super) fn refeature(&self, full: &[f32], out: &mut [f32]) {
+    /// The features (unit norm) that `full`, feature vectors one after the other of
+    /// spectra pooled over every band, become when only this cepstrum's bands are
+    /// compared: each spectrum is recovered from them (up to its level and scale, which
+    /// no feature keeps) and taken through this cepstrum. The same features when every
+    /// band is compared. For models pooled over every band (the built-in background).
+    pub(super) fn refeature(&self, full: &[f32]) -> Vec<f32> {
         if self.bands == BANDS {
-            out.copy_from_slice(full);
-            return;
+            return full.to_vec();
         }
-        // The inverse of the full DCT-II rows 1.. (orthogonal, of squared norm
-        // weight^2 BANDS / 2): the spectrum less its mean.
-        let mut spectrum = [0.0f32; BANDS];
-        for (k, &c) in full.iter().enumerate().take(FEATURES).skip(1) {
+        // The inverse of the full DCT-II rows 1.. (orthogonal, each of squared norm
+        // weight^2 BANDS / 2) gives the spectrum less its mean; through this cepstrum's
+        // rows: one matrix, `FEATURES` by `FEATURES`, made once for every vector.
+        let mut through = vec![0.0f32; FEATURES * FEATURES];
+        for k in 1..FEATURES {
             let weight = (k as f32).powf(LIFTER_POWER);
-            for (i, x) in spectrum.iter_mut().enumerate() {
+            for i in 0..BANDS {
                 let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / BANDS as f64;
-                *x += c * angle.cos() as f32 * 2.0 / (weight * BANDS as f32);
+                let inverse = angle.cos() as f32 * 2.0 / (weight * BANDS as f32);
+                for (t, row) in through
+                    .chunks_exact_mut(FEATURES)
+                    .zip(self.basis.chunks_exact(BANDS))
+                {
+                    t[k] += row[i] * inverse;
+                }
             }
         }
-        for (o, row) in out.iter_mut().zip(self.basis.chunks_exact(BANDS)) {
-            *o = row.iter().zip(&spectrum).map(|(w, x)| w * x).sum();
+        let mut out = vec![0.0f32; full.len()];
+        for (o, f) in out
+            .chunks_exact_mut(FEATURES)
+            .zip(full.chunks_exact(FEATURES))
+        {
+            for (x, t) in o.iter_mut().zip(through.chunks_exact(FEATURES)) {
+                *x = t.iter().zip(f).map(|(a, b)| a * b).sum();
+            }
+            scale_to_unit(o);
         }
-        scale_to_unit(out);
+        out
     }
 }
 
@@ -554,14 +567,12 @@ mod tests {
         let full = Cepstrum::full();
         let mut every = vec![0.0f32; FEATURES];
         features_of_power(&power, &full, &mut every);
-        let mut again = vec![0.0f32; FEATURES];
-        full.refeature(&every, &mut again);
-        assert_eq!(again, every);
+        assert_eq!(full.refeature(&every), every);
         for bands in [28, 20, 5] {
             let narrow = Cepstrum::new(bands);
-            let (mut direct, mut refeatured) = (vec![0.0f32; FEATURES], vec![0.0f32; FEATURES]);
+            let mut direct = vec![0.0f32; FEATURES];
             features_of_power(&power, &narrow, &mut direct);
-            narrow.refeature(&every, &mut refeatured);
+            let refeatured = narrow.refeature(&every);
             assert!(
                 similarity(&direct, &refeatured) > 0.9999,
                 "{bands} bands: {direct:?} against {refeatured:?}"
