@@ -280,19 +280,12 @@ impl std::fmt::Display for LookAlike {
 /// With the spectral method, the top of the highest band compared (Hz) when `patterns`'
 /// takes carry less than the full band (recorded at a low rate, or band-limited on their
 /// way in); `None` when they carry every band, and with the waveform method.
-pub fn takes_carry_under_hz(
-    patterns: &[Pattern],
-    settings: &DetectorSettings,
-) -> Result<Option<f64>, crate::detect::DetectError> {
+pub fn takes_carry_under_hz(patterns: &[Pattern], settings: &DetectorSettings) -> Option<f64> {
     if settings.method != Method::Spectral {
-        return Ok(None);
+        return None;
     }
-    let takes_only = DetectorSettings {
-        background: Vec::new(),
-        ..settings.clone()
-    };
-    let detector = crate::Detector::new(patterns.to_vec(), &takes_only, settings.sample_rate)?;
-    Ok(detector.compared_top_hz())
+    // An input at the working rate carries every band: the takes alone decide.
+    crate::detect::spectral::compared_top_hz(patterns, settings, settings.sample_rate)
 }
 
 /// With the spectral method, the pairs of `patterns` whose takes look alike over the

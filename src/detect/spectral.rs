@@ -213,6 +213,47 @@ pub fn background_model(samples: &[f32], settings: &DetectorSettings) -> Backgro
     BackgroundModel::new(FEATURES, matcher.decision_frames, templates)
 }
 
+/// The highest frequency (Hz) that an input at `input_rate` and every take of
+/// `patterns` carry: where the resampler's passband ends at the lowest of their rates,
+/// or lower where the takes fall off a filter's edge ([`takes_carry_under_hz`]). Only
+/// the bands under it are compared.
+fn carried_top_hz(
+    analyzer: &mut Analyzer,
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+    input_rate: u32,
+) -> f64 {
+    let lowest_rate = patterns
+        .iter()
+        .flat_map(|p| p.takes.iter().map(|t| t.recorded_rate))
+        .chain([input_rate, settings.sample_rate])
+        .min()
+        .unwrap_or(settings.sample_rate);
+    let takes = patterns
+        .iter()
+        .flat_map(|p| &p.takes)
+        .map(|t| &t.samples[..]);
+    let rate = f64::from(settings.sample_rate);
+    top_hz(f64::from(lowest_rate)).min(takes_carry_under_hz(analyzer, takes, rate))
+}
+
+/// The top of the highest band a matcher of `patterns` heard through an input at
+/// `input_rate` compares (Hz), when it compares fewer than every band; `None` when it
+/// compares every one. What [`SpectralMatcher::compared_top_hz`] says of a matcher
+/// built, without building one.
+pub fn compared_top_hz(
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+    input_rate: u32,
+) -> Option<f64> {
+    let rate = f64::from(settings.sample_rate);
+    let mut analyzer = Analyzer::new(rate);
+    let top = carried_top_hz(&mut analyzer, patterns, settings, input_rate);
+    analyzer.compare_under(rate, top);
+    let bands = analyzer.cepstrum.bands();
+    (bands < BANDS).then(|| band_top_hz(rate, bands - 1))
+}
+
 /// Which of the matcher's held stages: the one whose sounds fired, or the one that
 /// follows a held sound the speech guard stopped.
 #[derive(Clone, Copy)]
@@ -414,20 +455,8 @@ impl SpectralMatcher {
     pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings, input_rate: u32) -> Self {
         let rate = f64::from(settings.sample_rate);
         let mut analyzer = Analyzer::new(rate);
-        // Only the bands that the input and every take carry are compared: those under
-        // where the resampler's passband ends at the lowest of their rates.
-        let lowest_rate = patterns
-            .iter()
-            .flat_map(|p| p.takes.iter().map(|t| t.recorded_rate))
-            .chain([input_rate, settings.sample_rate])
-            .min()
-            .unwrap_or(settings.sample_rate);
-        let takes = patterns
-            .iter()
-            .flat_map(|p| &p.takes)
-            .map(|t| &t.samples[..]);
-        let carried = takes_carry_under_hz(&mut analyzer, takes, rate);
-        analyzer.compare_under(rate, top_hz(f64::from(lowest_rate)).min(carried));
+        let carried = carried_top_hz(&mut analyzer, &patterns, settings, input_rate);
+        analyzer.compare_under(rate, carried);
         let compared_bands = analyzer.cepstrum.bands();
         let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
