@@ -443,6 +443,37 @@ fn log_clipped_samples(new: u64, total: u64) {
 /// Replaced and clipped input samples are each logged at most this often.
 const BAD_SAMPLES_LOG_EVERY: Duration = Duration::from_secs(60);
 
+/// A running count of input samples (replaced, clipped) that `log` reports: what it
+/// added since the last report, at most every `BAD_SAMPLES_LOG_EVERY`, and at exit.
+struct SampleLog {
+    log: fn(u64, u64),
+    logged: u64,
+    last: Option<std::time::Instant>,
+}
+
+impl SampleLog {
+    fn new(log: fn(u64, u64)) -> Self {
+        Self {
+            log,
+            logged: 0,
+            last: None,
+        }
+    }
+
+    /// Reports what `total` adds, when the last report is old enough or `at_exit`.
+    fn report(&mut self, total: u64, at_exit: bool) {
+        let due = at_exit
+            || self
+                .last
+                .is_none_or(|t| t.elapsed() >= BAD_SAMPLES_LOG_EVERY);
+        if total > self.logged && due {
+            (self.log)(total - self.logged, total);
+            self.logged = total;
+            self.last = Some(std::time::Instant::now());
+        }
+    }
+}
+
 /// How long the capture may deliver nothing before it is opened again.
 const STALL_SECONDS: f64 = 3.0;
 /// Pause between two attempts to open a lost capture.
@@ -690,10 +721,8 @@ pub fn listen(
         "listening"
     );
     let mut failure: Option<&str> = None;
-    let mut bad_logged = 0u64;
-    let mut last_bad_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
-    let mut clipped_logged = 0u64;
-    let mut last_clipped_log = std::time::Instant::now() - BAD_SAMPLES_LOG_EVERY;
+    let mut bad_log = SampleLog::new(log_bad_samples);
+    let mut clipped_log = SampleLog::new(log_clipped_samples);
     loop {
         let message = match control_rx.recv_timeout(Duration::from_secs(1)) {
             Ok(m) => Some(m),
@@ -768,18 +797,8 @@ pub fn listen(
             failure = Some("the detector or output thread stopped unexpectedly");
             break;
         }
-        let bad = status.bad_samples();
-        if bad > bad_logged && last_bad_log.elapsed() >= BAD_SAMPLES_LOG_EVERY {
-            log_bad_samples(bad - bad_logged, bad);
-            bad_logged = bad;
-            last_bad_log = std::time::Instant::now();
-        }
-        let clipped = status.clipped_samples();
-        if clipped > clipped_logged && last_clipped_log.elapsed() >= BAD_SAMPLES_LOG_EVERY {
-            log_clipped_samples(clipped - clipped_logged, clipped);
-            clipped_logged = clipped;
-            last_clipped_log = std::time::Instant::now();
-        }
+        bad_log.report(status.bad_samples(), false);
+        clipped_log.report(status.clipped_samples(), false);
         if let Some(mic) = microphone.as_mut() {
             mic.check(None);
             if let Some((new_rate, new_channels, consumer)) = mic.reopen(&config) {
@@ -798,15 +817,8 @@ pub fn listen(
     }
     stop.store(true, Ordering::Release);
     let _ = detector_thread.join();
-    if status.bad_samples() > bad_logged {
-        log_bad_samples(status.bad_samples() - bad_logged, status.bad_samples());
-    }
-    if status.clipped_samples() > clipped_logged {
-        log_clipped_samples(
-            status.clipped_samples() - clipped_logged,
-            status.clipped_samples(),
-        );
-    }
+    bad_log.report(status.bad_samples(), true);
+    clipped_log.report(status.clipped_samples(), true);
     drop(command_tx);
     // The detector thread sent Stop after its last event.
     let output = output_thread.join().unwrap_or_default();
