@@ -8,7 +8,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
@@ -22,7 +22,7 @@
 # 16 kHz); with `sequences`, the sequences alone, the takes left as they were recorded
 # (enrolled through one microphone, heard through another).
 # lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
-# resampled to a full rate on its way in).
+# resampled to a full rate on its way in); `sequences` as for rate.
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
 # (an input gain set too high). All repeatable (sox -R).
 set -euo pipefail
@@ -81,12 +81,16 @@ case $kind in
         esac
         ;;
     lowpass)
-        [ $# -eq 1 ] || usage
-        top_hz=$1
+        [ $# -ge 1 ] && [ $# -le 2 ] || usage
+        top_hz=$1 which=${2:-all}
         case $top_hz in
             '' | *[!0-9]*) echo "room-sets.sh: lowpass $top_hz: expected a frequency in Hz, such as 6300" >&2; exit 2 ;;
         esac
-        added="every file low-passed at $top_hz Hz"
+        case $which in
+            all) added="every file low-passed at $top_hz Hz" ;;
+            sequences) added="the sequences low-passed at $top_hz Hz, the takes as they were" ;;
+            *) echo "room-sets.sh: lowpass $top_hz $which: expected nothing or 'sequences' after the frequency" >&2; exit 2 ;;
+        esac
         ;;
     gain)
         [ $# -eq 1 ] || usage
@@ -115,7 +119,11 @@ for set in "$src"/*/; do
         elif [ "$kind" = gain ]; then
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" gain "$gain_db"
         elif [ "$kind" = lowpass ]; then
-            sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$top_hz"
+            if [ "$which" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
+                cp "$wav" "$out/$name/$rel"
+            else
+                sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$top_hz"
+            fi
         elif [ "$kind" = rate ]; then
             if [ "$which" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
                 cp "$wav" "$out/$name/$rel"
