@@ -84,12 +84,13 @@ pub fn analyze_file_with(
         .map_or(ChannelSelect::Mix, ChannelSelect::Index);
     let mut source = WavSource::open(recording, select).map_err(AnalyzeError::Recording)?;
     let mut detector = Detector::new(patterns, &config.detector, source.sample_rate())?;
-    if let Some(top_hz) = detector.compared_top_hz() {
+    let takes_top_hz = detector.compared_top_hz();
+    if let Some(top_hz) = takes_top_hz {
         tracing::info!(
             recording = %recording.display(),
             rate = source.sample_rate(),
             top_hz = top_hz.round(),
-            "the recording or the takes carry less than the full band: only the bands under top_hz are compared"
+            "the recording's rate or the takes carry less than the full band: only the bands under top_hz are compared"
         );
     }
     if keep.scores {
@@ -117,6 +118,15 @@ pub fn analyze_file_with(
         return Err(AnalyzeError::EmptyRecording(recording.to_path_buf()));
     }
     detector.finish(&mut events);
+    if detector.compared_top_hz() != takes_top_hz {
+        if let Some(top_hz) = detector.compared_top_hz() {
+            tracing::info!(
+                recording = %recording.display(),
+                top_hz = top_hz.round(),
+                "the recording carries sound up to top_hz only (its loudest sounds fall off a filter's edge into noise): from where it showed it, only the bands under it were compared"
+            );
+        }
+    }
     if detector.bad_samples() > 0 {
         tracing::warn!(
             recording = %recording.display(),

@@ -774,6 +774,58 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     );
 }
 
+/// The example beat heard through a 16 kHz source resampled back to its own rate on its
+/// way in, its takes as recorded: `analyze -v` says how far up the recording carries
+/// sound, and finds what it finds in the full-band beat.
+#[test]
+fn analyze_follows_a_recording_that_carries_fewer_bands_than_its_takes() {
+    let beat = root().join("examples/beat.wav");
+    let mut source =
+        onomato::audio::WavSource::open(&beat, onomato::audio::ChannelSelect::Mix).unwrap();
+    let rate = source.sample_rate();
+    let narrow = onomato::audio::resample_clip(&source.read_all().unwrap(), rate, 16_000).unwrap();
+    let back = onomato::audio::resample_clip(&narrow, 16_000, rate).unwrap();
+    let dir = temp_dir("analyze-narrow");
+    let narrow_beat = dir.join("beat-via-16k.wav");
+    common::write_wav_f32(&narrow_beat, &back, rate);
+    let events = |recording: &str| {
+        let out = onomato(&[
+            "analyze",
+            recording,
+            "--config",
+            "config/onomato.toml",
+            "-v",
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
+        let events: Vec<(String, f64)> = doc["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| {
+                (
+                    e["pattern"].as_str().unwrap().to_string(),
+                    e["time"].as_f64().unwrap(),
+                )
+            })
+            .collect();
+        (events, stderr(&out))
+    };
+    let (full, log) = events("examples/beat.wav");
+    assert!(!log.contains("the recording carries sound up to"), "{log}");
+    let (heard, log) = events(&narrow_beat.display().to_string());
+    assert!(log.contains("the recording carries sound up to"), "{log}");
+    let found = full
+        .iter()
+        .filter(|(p, t)| heard.iter().any(|(q, u)| p == q && (t - u).abs() <= 0.05))
+        .count();
+    assert!(
+        found as f64 >= 0.9 * full.len() as f64 && heard.len() <= full.len() + 1,
+        "{found} of {} found again: {heard:?} against {full:?}",
+        full.len()
+    );
+}
+
 #[test]
 fn explain_lists_every_onset_with_what_became_of_it() {
     let out = onomato(&[

@@ -124,6 +124,35 @@ fn processing_blocks_allocates_nothing_through_the_resampler() {
     check(Method::Spectral, 48_000, 480);
 }
 
+/// Full-band takes heard through a 16 kHz source resampled to 48 kHz on its way in: the
+/// stream shows its band with its first sound, and the comparison is made again for the
+/// bands it carries while blocks are processed, allocating nothing.
+#[test]
+fn a_stream_found_to_carry_fewer_bands_is_followed_without_allocating() {
+    let (settings, patterns) = patterns_for(Method::Spectral);
+    let narrow = onomato::audio::resample_clip(&scene(), RATE, 16_000).unwrap();
+    let rec = onomato::audio::resample_clip(&narrow, 16_000, 48_000).unwrap();
+    let mut det = Detector::new(patterns, &settings, 48_000).unwrap();
+    assert_eq!(det.compared_top_hz(), None, "the takes carry every band");
+    let mut events: Vec<Event> = Vec::with_capacity(256);
+    let n = allocations_in(|| {
+        for chunk in rec.chunks(480) {
+            det.process(chunk, &mut events);
+        }
+    });
+    assert_eq!(n, 0, "{n} allocations while following the stream's band");
+    let top = det
+        .compared_top_hz()
+        .expect("the stream's band is followed");
+    assert!((5_000.0..8_000.0).contains(&top), "compared up to {top} Hz");
+    det.finish(&mut events);
+    let impulses = events.iter().filter(|e| e.end.is_none()).count();
+    assert!(
+        impulses >= 17,
+        "{impulses} of 18 impulses found: {events:#?}"
+    );
+}
+
 /// The daemon's detector thread work, block by block: stereo frames from the ring at
 /// 48 kHz, given to two performers (the left channel, and the mix), resampled,
 /// detected, handed over with `try_send`.

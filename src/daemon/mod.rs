@@ -38,12 +38,15 @@ struct Lane {
     select: ChannelSelect,
     mono: Vec<f32>,
     events: Vec<Event>,
+    /// The top of the bands its detector compares, as last logged.
+    compared_top_hz: Option<f64>,
 }
 
 impl Lane {
     fn new(mut l: LaneDetector, block_frames: usize) -> Self {
         l.detector.report_begins(true);
         Self {
+            compared_top_hz: l.detector.compared_top_hz(),
             detector: l.detector,
             select: l.select,
             mono: Vec::with_capacity(block_frames),
@@ -152,6 +155,12 @@ impl DetectorStage {
                 level.store(peak_db(peak).to_bits(), Ordering::Relaxed);
             }
             lane.detector.process(&lane.mono, &mut lane.events);
+            let compared_top_hz = lane.detector.compared_top_hz();
+            if compared_top_hz != lane.compared_top_hz {
+                // Rare: when the input's loudest sounds first show a filter's edge.
+                lane.compared_top_hz = compared_top_hz;
+                log_compared_band(index, compared_top_hz);
+            }
             bad += lane.detector.bad_samples();
             clipped += lane.detector.clipped_samples();
         }
@@ -370,6 +379,22 @@ fn load_lane_patterns(config: &Config) -> anyhow::Result<Vec<Vec<Pattern>>> {
             })
         })
         .collect()
+}
+
+/// Says which bands performer `lane`'s detector now compares, once the input has shown
+/// that it carries fewer (or, after all, every one).
+fn log_compared_band(lane: usize, top_hz: Option<f64>) {
+    match top_hz {
+        Some(top_hz) => tracing::info!(
+            performer = lane,
+            top_hz = top_hz.round(),
+            "the input carries sound up to top_hz only (its loudest sounds fall off a filter's edge into noise): only the bands under it are compared"
+        ),
+        None => tracing::info!(
+            performer = lane,
+            "the input carries every band after all: every band is compared"
+        ),
+    }
 }
 
 /// One performer's detector at `rate` and the channel it hears; `lane`: its config

@@ -94,6 +94,23 @@ impl BackgroundModel {
         Self::new(self.features, self.decision_frames, templates)
     }
 
+    /// A model of its own templates, which [`Self::compare_on`] can make again in place.
+    pub(super) fn own_copy(&self) -> Self {
+        Self::new(self.features, self.decision_frames, self.templates.to_vec())
+    }
+
+    /// This model made again as [`Self::compared_on`] makes `full` (of as many
+    /// templates, pooled over every band), in place when this model's templates are
+    /// its own ([`Self::own_copy`]): while a stream runs, without allocating.
+    pub(super) fn compare_on(&mut self, full: &Self, cepstrum: &Cepstrum) {
+        match Arc::get_mut(&mut self.templates) {
+            Some(own) if own.len() == full.templates.len() => {
+                cepstrum.refeature_into(&full.templates, own);
+            }
+            _ => *self = full.clone().compared_on(cepstrum),
+        }
+    }
+
     /// This model's templates and `other`'s, which must be pooled alike (an empty
     /// model takes the other's shape).
     pub fn joined(&self, other: &BackgroundModel) -> Self {

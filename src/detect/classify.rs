@@ -195,6 +195,12 @@ impl Tracked {
         }
     }
 
+    /// Forgets every tracked template (the features they were made of are no longer
+    /// those compared).
+    pub(super) fn forget(&mut self) {
+        self.set.fill(false);
+    }
+
     /// Pattern `pattern`'s tracked template, once a confident instance has set it.
     pub(super) fn template(&self, pattern: usize) -> Option<&[f32]> {
         let n = self.features;

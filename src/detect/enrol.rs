@@ -7,10 +7,11 @@
 //! it), never per block.
 
 use super::features::{
-    band_centres, band_top_hz, features_of_power, pool_power, scale_to_unit, similarity, Analyzer,
-    Cepstrum, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, pool_power, scale_to_unit, similarity, Analyzer, Cepstrum, BANDS, FEATURES,
+    HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::onset::OnsetParams;
+use super::passband::Passband;
 use super::place::{first_window_within, Placer, ONSET_RANGE_DB, PLACE_AFTER_FRAMES};
 use super::spectral::{run_onset_stage, MAX_SHIFT};
 use super::{white_noise, NOISE_SEED};
@@ -75,13 +76,17 @@ pub(super) fn shrink_takes_towards_their_mean(templates: &mut [Template], kinds:
             }
         }
         scale_to_unit(&mut mean);
-        let drawn: Vec<f32> = mean.iter().map(|m| TAKE_SHRINK * m).collect();
+        let drawn = mean.map(|m| TAKE_SHRINK * m);
         for t in templates.iter_mut().filter(|t| is_take(t)) {
             for (x, d) in t.features.iter_mut().zip(&drawn) {
                 *x += d;
             }
             scale_to_unit(&mut t.features);
-            t.drawn_towards = Some(drawn.clone());
+            // Made again in place when the comparison changes (a narrower stream).
+            match &mut t.drawn_towards {
+                Some(was) => was.copy_from_slice(&drawn),
+                None => t.drawn_towards = Some(drawn.to_vec()),
+            }
         }
     }
 }
@@ -130,67 +135,101 @@ const PARTING_DROP: f32 = 0.02;
 /// as the wait), is decided over the windows that part it most. A pair that
 /// stays alike however long it is heard (two knocks on one table) gains nothing by
 /// waiting, and gets 1, as does every pair that is not alike to begin with.
-pub(super) fn separating_windows(
-    templates: &[Template],
-    kinds: &[PatternKind],
+///
+/// Made with the templates, so that the waits can be made again without allocating
+/// when the stream turns out to carry fewer bands than the takes.
+pub(super) struct Separating {
     decision_frames: usize,
-    cepstrum: &Cepstrum,
     alike: f32,
     max_windows: usize,
-) -> Vec<u8> {
-    let n = kinds.len();
-    // Each take's features over 1..=max_windows windows, made once.
-    let mut power = [0.0f32; BANDS];
-    let mut features = vec![0.0f32; templates.len() * max_windows * FEATURES];
-    for (t, chunk) in templates
-        .iter()
-        .zip(features.chunks_exact_mut(max_windows * FEATURES))
-    {
-        for (w, out) in chunk.chunks_exact_mut(FEATURES).enumerate() {
-            window_power(t, w + 1, decision_frames, &mut power);
-            features_of_power(&power, cepstrum, out);
+    /// Each take's features over 1..=max_windows windows.
+    features: Vec<f32>,
+    /// Per ordered pair of patterns and window, their most alike takes' similarity.
+    most_alike: Vec<f32>,
+}
+
+impl Separating {
+    /// For `templates` of `patterns` with decision windows of `decision_frames`.
+    pub(super) fn new(
+        templates: usize,
+        patterns: usize,
+        decision_frames: usize,
+        alike: f32,
+        max_windows: usize,
+    ) -> Self {
+        Self {
+            decision_frames,
+            alike,
+            max_windows,
+            features: vec![0.0; templates * max_windows * FEATURES],
+            most_alike: vec![0.0; patterns * patterns * max_windows],
         }
     }
-    let of = |t: usize, w: usize| &features[(t * max_windows + w - 1) * FEATURES..][..FEATURES];
-    let mut most_alike = vec![f32::NEG_INFINITY; n * n * max_windows];
-    for (i, ta) in templates.iter().enumerate() {
-        for (j, tb) in templates.iter().enumerate().skip(i + 1) {
-            let (p, q) = (ta.pattern, tb.pattern);
-            if p == q || kinds[p] != PatternKind::Impulse || kinds[q] != PatternKind::Impulse {
-                continue;
+
+    /// The waits of `templates` (as many as this was made for) compared through
+    /// `cepstrum`, into `out` (patterns × patterns).
+    pub(super) fn waits(
+        &mut self,
+        templates: &[Template],
+        kinds: &[PatternKind],
+        cepstrum: &Cepstrum,
+        out: &mut [u8],
+    ) {
+        let (decision_frames, alike, max_windows) =
+            (self.decision_frames, self.alike, self.max_windows);
+        let n = kinds.len();
+        // Each take's features over 1..=max_windows windows, made once.
+        let mut power = [0.0f32; BANDS];
+        let features = &mut self.features[..templates.len() * max_windows * FEATURES];
+        for (t, chunk) in templates
+            .iter()
+            .zip(features.chunks_exact_mut(max_windows * FEATURES))
+        {
+            for (w, out) in chunk.chunks_exact_mut(FEATURES).enumerate() {
+                window_power(t, w + 1, decision_frames, &mut power);
+                features_of_power(&power, cepstrum, out);
             }
-            for w in 1..=max_windows {
-                let s = similarity(of(i, w), of(j, w));
-                for (x, y) in [(p, q), (q, p)] {
-                    let m = &mut most_alike[(x * n + y) * max_windows + w - 1];
-                    *m = m.max(s);
+        }
+        let of = |t: usize, w: usize| &features[(t * max_windows + w - 1) * FEATURES..][..FEATURES];
+        let most_alike = &mut self.most_alike[..n * n * max_windows];
+        most_alike.fill(f32::NEG_INFINITY);
+        for (i, ta) in templates.iter().enumerate() {
+            for (j, tb) in templates.iter().enumerate().skip(i + 1) {
+                let (p, q) = (ta.pattern, tb.pattern);
+                if p == q || kinds[p] != PatternKind::Impulse || kinds[q] != PatternKind::Impulse {
+                    continue;
+                }
+                for w in 1..=max_windows {
+                    let s = similarity(of(i, w), of(j, w));
+                    for (x, y) in [(p, q), (q, p)] {
+                        let m = &mut most_alike[(x * n + y) * max_windows + w - 1];
+                        *m = m.max(s);
+                    }
                 }
             }
         }
-    }
-    (0..n * n)
-        .map(|pair| {
+        for (pair, windows) in out.iter_mut().enumerate().take(n * n) {
             let by_window = &most_alike[pair * max_windows..(pair + 1) * max_windows];
-            if by_window[0] < alike {
-                return 1;
-            }
-            if let Some(w) = by_window.iter().position(|&s| s < alike) {
-                return (w + 1) as u8;
-            }
-            let mut most_parted = 0;
-            for (w, &s) in by_window.iter().enumerate() {
-                if s < by_window[most_parted] {
-                    most_parted = w;
-                }
-            }
-            let least_alike = by_window[most_parted];
-            if least_alike <= by_window[0] - PARTING_DROP {
-                (most_parted + 1) as u8
-            } else {
+            *windows = if by_window[0] < alike {
                 1
-            }
-        })
-        .collect()
+            } else if let Some(w) = by_window.iter().position(|&s| s < alike) {
+                (w + 1) as u8
+            } else {
+                let mut most_parted = 0;
+                for (w, &s) in by_window.iter().enumerate() {
+                    if s < by_window[most_parted] {
+                        most_parted = w;
+                    }
+                }
+                let least_alike = by_window[most_parted];
+                if least_alike <= by_window[0] - PARTING_DROP {
+                    (most_parted + 1) as u8
+                } else {
+                    1
+                }
+            };
+        }
+    }
 }
 
 /// What [`take_features`] finds in one take.
@@ -285,50 +324,28 @@ pub(super) fn take_features(
     }
 }
 
-/// A fall of this much (dB) over [`CLIFF_BANDS`] bands of the takes' loudest frames is
-/// a filter's edge, not a sound's: three of the top mel bands span about a third of an
-/// octave, and 20 dB over it is over 50 dB an octave, steeper than a voice, a knock or
-/// a microphone's own roll-off, but what a converter's anti-aliasing filter or a
-/// resampler does. Over the takes of every dev set, unheard voice and room the steepest
-/// fall above `CLIFF_LOWEST_HZ` is 16 dB (synthetic words, knocks); low-passed at
-/// 6.3 kHz, 25 to 77 dB (`docs/classify.md`, "An input that carries fewer bands").
-const CLIFF_DB: f32 = 20.0;
-const CLIFF_BANDS: usize = 3;
-/// Falls under this are the sound's own: a "boom" may have nothing over a few hundred
-/// hertz. It is where an 8 kHz input's band ends, the narrowest one compared.
-const CLIFF_LOWEST_HZ: f64 = 3_000.0;
-
 /// The highest frequency the takes carry when they were band-limited on their way in
-/// (a 16 kHz source resampled to 48 kHz before it was saved): the top edge of the band
-/// where the first cliff ([`CLIFF_DB`]) of their loudest frames, band by band over every
-/// take, begins (the bands on the cliff are the filter's transition); infinite when
-/// there is none. The input a take was recorded through is the one its user performs
-/// through, so the stream is taken to carry no more.
+/// (a 16 kHz source resampled to 48 kHz before it was saved): where the loudest frames,
+/// band by band over every take, fall off a filter's edge ([`Passband`]); infinite when
+/// they do not. The input a take was recorded through is the one its user performs
+/// through, so the stream is taken to carry no more until it shows otherwise.
 pub(super) fn takes_carry_under_hz<'a>(
     analyzer: &mut Analyzer,
     takes: impl IntoIterator<Item = &'a [f32]>,
     rate: f64,
 ) -> f64 {
     let (win, hop) = (analyzer.win, analyzer.hop);
-    let mut loudest = [f32::NEG_INFINITY; BANDS];
+    let mut passband = Passband::new(rate);
     let mut frame = [0.0f32; BANDS];
     for take in takes {
         let mut start = 0;
         while start + win <= take.len() {
             analyzer.frame(&take[start..start + win], &mut frame);
-            // The bands' own powers: the frame's dB are floored under its loudest band.
-            for (l, p) in loudest.iter_mut().zip(&analyzer.power) {
-                *l = l.max(10.0 * (p + 1e-20).log10());
-            }
+            passband.push(&analyzer.power);
             start += hop;
         }
     }
-    let centres = band_centres(rate);
-    (CLIFF_BANDS..BANDS)
-        .find(|&b| {
-            centres[b] >= CLIFF_LOWEST_HZ && loudest[b] < loudest[b - CLIFF_BANDS] - CLIFF_DB
-        })
-        .map_or(f64::INFINITY, |b| band_top_hz(rate, b - CLIFF_BANDS))
+    passband.top_hz()
 }
 
 /// Enrolment's quiet room lies this far (dB) under a take's quietest 5 ms, so that
@@ -471,6 +488,20 @@ mod tests {
     use super::*;
     use crate::detect::white_noise;
 
+    /// [`separating_windows`] over decision windows of 5 frames, pairs alike at 0.7.
+    fn waits(
+        templates: &[Template],
+        kinds: &[PatternKind],
+        cepstrum: &Cepstrum,
+        max_windows: usize,
+    ) -> Vec<u8> {
+        let n = kinds.len();
+        let mut out = vec![0; n * n];
+        Separating::new(templates.len(), n, 5, 0.7, max_windows)
+            .waits(templates, kinds, cepstrum, &mut out);
+        out
+    }
+
     fn settings() -> DetectorSettings {
         DetectorSettings {
             method: crate::config::Method::Spectral,
@@ -587,14 +618,14 @@ mod tests {
             .map(|(p, take)| template(&mut analyzer, take, p))
             .collect();
         let kinds = vec![PatternKind::Impulse; takes.len()];
-        let wait = separating_windows(&templates, &kinds, 5, &analyzer.cepstrum, 0.7, 3);
+        let wait = waits(&templates, &kinds, &analyzer.cepstrum, 3);
         let n = takes.len();
         let pair = |p: usize, q: usize| wait[p * n + q];
         // One window (26 ms of sound) holds the burst only; the later ones, the vowels.
         assert!((2..=3).contains(&pair(0, 1)), "{wait:?}");
         assert_eq!(pair(1, 0), pair(0, 1));
         // Waiting no longer than one window, nothing waits.
-        let one = separating_windows(&templates, &kinds, 5, &analyzer.cepstrum, 0.7, 1);
+        let one = waits(&templates, &kinds, &analyzer.cepstrum, 1);
         assert!(one.iter().all(|&w| w == 1), "{one:?}");
         // The burst alone parts from a vowel's sound later as well.
         assert!(pair(0, 2) > 1, "{wait:?}");
@@ -605,7 +636,7 @@ mod tests {
         // Held patterns are never waited for.
         let mut held = kinds.clone();
         held[1] = PatternKind::Continuous;
-        let wait = separating_windows(&templates, &held, 5, &analyzer.cepstrum, 0.7, 3);
+        let wait = waits(&templates, &held, &analyzer.cepstrum, 3);
         assert_eq!(wait[1], 1);
     }
 
@@ -630,7 +661,7 @@ mod tests {
                 .map(|(p, take)| template(&mut analyzer, take, p))
                 .collect();
             let kinds = [PatternKind::Impulse; 2];
-            let w = separating_windows(&templates, &kinds, 5, &analyzer.cepstrum, 0.7, max_windows);
+            let w = waits(&templates, &kinds, &analyzer.cepstrum, max_windows);
             assert_eq!(w[1], w[2], "{w:?}");
             w[1]
         };

@@ -86,14 +86,13 @@ struct MelBand {
 }
 
 /// The edges of the mel bands at `rate` (`BANDS + 2` of them, in Hz): band `b` rises
-/// from edge `b` to `b + 1` and falls to `b + 2`.
-fn band_edges(rate: f64) -> Vec<f64> {
+/// from edge `b` to `b + 1` and falls to `b + 2`. Allocates nothing: the bands compared
+/// are found again while a stream runs.
+fn band_edges(rate: f64) -> [f64; BANDS + 2] {
     let mel = |hz: f64| 2595.0 * (1.0 + hz / 700.0).log10();
     let hz = |m: f64| 700.0 * (10f64.powf(m / 2595.0) - 1.0);
     let (m0, m1) = (mel(LOW_HZ), mel(top_hz(rate)));
-    (0..BANDS + 2)
-        .map(|i| hz(m0 + (m1 - m0) * i as f64 / (BANDS + 1) as f64))
-        .collect()
+    std::array::from_fn(|i| hz(m0 + (m1 - m0) * i as f64 / (BANDS + 1) as f64))
 }
 
 /// The centre of each mel band at `rate`, in Hz.
@@ -278,16 +277,26 @@ pub(super) struct Cepstrum {
 impl Cepstrum {
     /// The DCT-II rows over the first `bands` bands (at least 2, at most `BANDS`).
     pub(super) fn new(bands: usize) -> Self {
+        let mut cepstrum = Self {
+            basis: vec![0.0f32; FEATURES * BANDS],
+            bands: 0,
+        };
+        cepstrum.set_bands(bands);
+        cepstrum
+    }
+
+    /// The rows over the first `bands` bands instead, made in place.
+    pub(super) fn set_bands(&mut self, bands: usize) {
         let bands = bands.clamp(2, BANDS);
-        let mut basis = vec![0.0f32; FEATURES * BANDS];
+        self.basis.fill(0.0);
         for k in 1..bands {
             let weight = (k as f32).powf(LIFTER_POWER);
             for i in 0..bands {
                 let angle = std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / bands as f64;
-                basis[k * BANDS + i] = weight * angle.cos() as f32;
+                self.basis[k * BANDS + i] = weight * angle.cos() as f32;
             }
         }
-        Self { basis, bands }
+        self.bands = bands;
     }
 
     /// Every band.
@@ -306,13 +315,21 @@ impl Cepstrum {
     /// no feature keeps) and taken through this cepstrum. The same features when every
     /// band is compared. For models pooled over every band (the built-in background).
     pub(super) fn refeature(&self, full: &[f32]) -> Vec<f32> {
+        let mut out = vec![0.0f32; full.len()];
+        self.refeature_into(full, &mut out);
+        out
+    }
+
+    /// [`Self::refeature`] into `out`, as long as `full`.
+    pub(super) fn refeature_into(&self, full: &[f32], out: &mut [f32]) {
         if self.bands == BANDS {
-            return full.to_vec();
+            out.copy_from_slice(full);
+            return;
         }
         // The inverse of the full DCT-II rows 1.. (orthogonal, each of squared norm
         // weight^2 BANDS / 2) gives the spectrum less its mean; through this cepstrum's
         // rows: one matrix, `FEATURES` by `FEATURES`, made once for every vector.
-        let mut through = vec![0.0f32; FEATURES * FEATURES];
+        let mut through = [0.0f32; FEATURES * FEATURES];
         for k in 1..FEATURES {
             let weight = (k as f32).powf(LIFTER_POWER);
             for i in 0..BANDS {
@@ -326,7 +343,6 @@ impl Cepstrum {
                 }
             }
         }
-        let mut out = vec![0.0f32; full.len()];
         for (o, f) in out
             .chunks_exact_mut(FEATURES)
             .zip(full.chunks_exact(FEATURES))
@@ -336,7 +352,6 @@ impl Cepstrum {
             }
             scale_to_unit(o);
         }
-        out
     }
 }
 

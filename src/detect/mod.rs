@@ -18,6 +18,7 @@ pub mod gates;
 mod held;
 mod levels;
 pub mod onset;
+mod passband;
 mod pitch;
 mod place;
 pub mod spectral;

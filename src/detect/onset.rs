@@ -186,6 +186,12 @@ impl OnsetDetector {
         &self.floor
     }
 
+    /// How far the room's noise stands over a band's floor (a power ratio): the weight
+    /// that makes a band at the room's level barely move the onset function.
+    pub fn room_over_floor(&self) -> f32 {
+        1.0 + self.params.floor_weight
+    }
+
     /// Feeds the next frame's band powers (linear); returns the onset whose peak was
     /// the frame before, if there is one.
     pub fn push(&mut self, power: &[f32]) -> Option<Onset> {

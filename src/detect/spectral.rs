@@ -64,18 +64,19 @@ use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
 use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
 use super::enrol::{
-    first_block_within, separating_windows, shrink_takes_towards_their_mean, take_features,
-    take_onsets, takes_carry_under_hz, window_power, TakeFeatures, Template,
-    SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+    first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
+    takes_carry_under_hz, window_power, Separating, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS,
+    SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    band_top_hz, features_of_power, normalise, pool_power, similarity, top_hz, Analyzer, LowCut,
-    BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    band_top_hz, features_of_power, normalise, pool_power, present_bands, similarity, top_hz,
+    Analyzer, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
 use super::levels::{Levels, SILENT_DB};
 use super::onset::{Onset, OnsetDetector, OnsetParams};
+use super::passband::Passband;
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
 use super::Event;
@@ -101,7 +102,9 @@ struct PatternInfo {
     kind: PatternKind,
     threshold: f32,
     continuous_threshold: f32,
-    /// Continuous patterns: centred, unit-norm mean frame after the onset.
+    /// Continuous patterns: the takes' mean frame after the onset (dB per band)...
+    mean_frame: Vec<f32>,
+    /// ...centred and unit-norm over the bands compared.
     sustain: Vec<f32>,
     /// Mean power per sample of the takes.
     power: f64,
@@ -342,7 +345,12 @@ pub struct SpectralMatcher {
     best_instance: Vec<f32>,
     /// Every onset decided and what became of it, when asked for (offline).
     explain: Option<Vec<OnsetRecord>>,
+    /// The sounds of speech, the room... that must never fire, as compared: the
+    /// built-in model and the user's own ([`Self::add_background`]) through the
+    /// cepstrum...
     background: BackgroundModel,
+    /// ...from their features over every band.
+    background_full: BackgroundModel,
     /// The onset being classified: its best similarity with the background.
     background_score: f32,
     /// Per ordered pair of patterns (row-major): over how many decision windows the
@@ -350,11 +358,19 @@ pub struct SpectralMatcher {
     separating: Vec<u8>,
     /// The most windows any pair waits for (1: none waits).
     max_windows: usize,
+    separating_scratch: Separating,
     /// A take's pooled power over several windows (scratch).
     take_power: Vec<f32>,
     /// The features of every onset that stands out of its quiet, when building a
     /// background model ([`background_model`]).
     collected: Option<Vec<f32>>,
+    /// Per pattern, its kind.
+    kinds: Vec<PatternKind>,
+    /// The highest frequency that the input's rate and the takes carry (Hz), and how
+    /// far up the stream's own loudest frames carry sound: the bands compared are those
+    /// under both.
+    carried_top_hz: f64,
+    passband: Passband,
 }
 
 /// Two patterns whose takes look alike over the decision window
@@ -457,7 +473,6 @@ impl SpectralMatcher {
         let mut analyzer = Analyzer::new(rate);
         let carried = carried_top_hz(&mut analyzer, &patterns, settings, input_rate);
         analyzer.compare_under(rate, carried);
-        let compared_bands = analyzer.cepstrum.bands();
         let onset_params = OnsetParams::default();
         // The decision waits for the frames whose windows reach `decision_seconds` past
         // the onset (the onset frame is centred on it), shift tolerance included.
@@ -525,14 +540,13 @@ impl SpectralMatcher {
             for s in &mut sustain {
                 *s /= sustain_frames.max(1) as f32;
             }
-            sustain[compared_bands..].fill(0.0);
-            normalise(&mut sustain[..compared_bands]);
             infos.push(PatternInfo {
                 name: p.name.clone(),
                 kind: p.kind,
                 threshold: p.threshold as f32,
                 continuous_threshold: p.continuous_threshold as f32,
-                sustain,
+                sustain: sustain.clone(),
+                mean_frame: sustain,
                 power: power / p.takes.len().max(1) as f64,
             });
         }
@@ -542,31 +556,19 @@ impl SpectralMatcher {
         let (win, hop_seconds) = (analyzer.win, analyzer.hop as f64 / rate);
         let n_patterns = infos.len();
         let kinds: Vec<PatternKind> = infos.iter().map(|i| i.kind).collect();
-        let separating = separating_windows(
-            &templates,
-            &kinds,
-            decision_frames,
-            &analyzer.cepstrum,
-            ALIKE_SIMILARITY,
-            allowed_windows,
-        );
-        // The most any pair waits for.
-        let max_windows = separating.iter().copied().max().unwrap_or(1).max(1) as usize;
-        shrink_takes_towards_their_mean(&mut templates, &kinds);
         // Nothing is compared without templates (enrolment's probe of a take).
         let noise_over_floor = if templates.is_empty() {
             vec![1.0; BANDS]
         } else {
             default_noise_over_floor(rate)
         };
-        let background = BackgroundModel::builtin()
-            .for_matcher(FEATURES, decision_frames)
-            .compared_on(&analyzer.cepstrum);
+        let background_full = BackgroundModel::builtin().for_matcher(FEATURES, decision_frames);
         let gates = GateParams {
             min_strength: settings.min_strength,
             ..GateParams::default()
         };
-        Self {
+        let templates_len = templates.len();
+        let mut matcher = Self {
             rate,
             decision_frames,
             templates,
@@ -618,13 +620,52 @@ impl SpectralMatcher {
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
-            background,
+            background: background_full.own_copy(),
+            background_full,
             background_score: f32::NEG_INFINITY,
-            separating,
-            max_windows,
+            separating: vec![1; n_patterns * n_patterns],
+            separating_scratch: Separating::new(
+                templates_len,
+                n_patterns,
+                decision_frames,
+                ALIKE_SIMILARITY,
+                allowed_windows,
+            ),
+            max_windows: 1,
             take_power: vec![0.0; BANDS],
             collected: None,
+            kinds,
+            carried_top_hz: carried,
+            passband: Passband::new(rate),
+        };
+        matcher.compare_bands(matcher.analyzer.cepstrum.bands());
+        matcher
+    }
+
+    /// Makes everything that depends on the bands compared again for the first
+    /// `bands`: the cepstrum, the takes' features and their shrink, the held patterns'
+    /// spectra, the pairs' waits, the background's features; the tracked templates
+    /// start again. Allocates nothing: called while a stream runs, when it turns out to
+    /// carry fewer bands than the takes ([`Passband`]).
+    fn compare_bands(&mut self, bands: usize) {
+        let cepstrum = &mut self.analyzer.cepstrum;
+        cepstrum.set_bands(bands);
+        let bands = cepstrum.bands();
+        for t in &mut self.templates {
+            features_of_power(&t.pooled_power, cepstrum, &mut t.features);
         }
+        shrink_takes_towards_their_mean(&mut self.templates, &self.kinds);
+        for info in &mut self.patterns {
+            info.sustain.copy_from_slice(&info.mean_frame);
+            info.sustain[bands..].fill(0.0);
+            normalise(&mut info.sustain[..bands]);
+        }
+        self.separating_scratch
+            .waits(&self.templates, &self.kinds, cepstrum, &mut self.separating);
+        // The most any pair waits for.
+        self.max_windows = self.separating.iter().copied().max().unwrap_or(1).max(1) as usize;
+        self.background.compare_on(&self.background_full, cepstrum);
+        self.tracked.forget();
     }
 
     /// Adds `own` (made by [`background_model`] with this matcher's settings, from a
@@ -632,9 +673,10 @@ impl SpectralMatcher {
     /// sounds an onset is compared with besides the patterns. Called while the
     /// detector is built, never per block.
     pub fn add_background(&mut self, own: &BackgroundModel) {
-        self.background = self
-            .background
-            .joined(&own.clone().compared_on(&self.analyzer.cepstrum));
+        self.background_full = self.background_full.joined(own);
+        self.background = self.background_full.own_copy();
+        self.background
+            .compare_on(&self.background_full, &self.analyzer.cepstrum);
     }
 
     /// Keeps a record of every onset from now on (grows with the stream: offline).
@@ -793,6 +835,7 @@ impl SpectralMatcher {
             self.window_buf[i] = self.sample(start + i as u64);
         }
         let level = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
+        self.passband.push(&self.analyzer.power);
         let f = self.frame_count;
         let slot = (f % self.frame_capacity as u64) as usize;
         self.frames[slot * BANDS..(slot + 1) * BANDS].copy_from_slice(&self.frame_buf);
@@ -1083,6 +1126,15 @@ impl SpectralMatcher {
         }
         if self.templates.is_empty() {
             return None;
+        }
+        // Only the bands that the stream, as its loudest frames so far show it, carries
+        // too are compared.
+        let stream_top = self
+            .passband
+            .top_hz_over_noise(self.onsets.band_floors(), self.onsets.room_over_floor());
+        let bands = present_bands(self.rate, self.carried_top_hz.min(stream_top));
+        if bands != self.analyzer.cepstrum.bands() {
+            self.compare_bands(bands);
         }
         self.score_patterns(onset_frame);
         let mut best = 0;
