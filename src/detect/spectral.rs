@@ -25,7 +25,9 @@
 //! enrolled from both (`first_block_within`, `SOFT_ONSET_RANGE_DB`).
 //!
 //! Classification: the frames of the first `decision_seconds` from the onset (the
-//! first one centred on it) are pooled into features ([`super::features`]) and
+//! first one centred on it) are pooled into features ([`super::features`]) over the
+//! bands that the input's rate, the takes and the stream so far all carry
+//! ([`super::passband`]; made again in place when the stream shows less), and
 //! compared by cosine with the same of every enrolment take (an impulse pattern's
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), each take as
 //! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
