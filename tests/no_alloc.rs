@@ -151,6 +151,15 @@ fn a_stream_found_to_carry_fewer_bands_is_followed_without_allocating() {
         impulses >= 17,
         "{impulses} of 18 impulses found: {events:#?}"
     );
+    // The bound the live bounce solver takes at start holds over the bands compared later.
+    let bound = det.decision_delay_bound();
+    for e in events.iter().filter(|e| e.end.is_none()) {
+        let late = e.emitted_at - e.time;
+        assert!(
+            late <= bound,
+            "decided {late:.4} s after, bound {bound:.4} s"
+        );
+    }
 }
 
 /// The daemon's detector thread work, block by block: stereo frames from the ring at

@@ -72,7 +72,7 @@ use super::enrol::{
 };
 use super::features::{
     band_top_hz, features_of_power, normalise, pool_power, present_bands, similarity, top_hz,
-    Analyzer, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -358,7 +358,7 @@ pub struct SpectralMatcher {
     /// Per ordered pair of patterns (row-major): over how many decision windows the
     /// choice between them is made ([`separating_windows`]).
     separating: Vec<u8>,
-    /// The most windows any pair waits for (1: none waits).
+    /// The most windows any pair waits for, over any bands compared (1: none waits).
     max_windows: usize,
     separating_scratch: Separating,
     /// A take's pooled power over several windows (scratch).
@@ -640,7 +640,21 @@ impl SpectralMatcher {
             carried_top_hz: carried,
             passband: Passband::new(rate),
         };
-        matcher.compare_bands(matcher.analyzer.cepstrum.bands());
+        let bands = matcher.analyzer.cepstrum.bands();
+        // Whatever bands the stream leaves compared, no pair waits longer than this.
+        let mut fewer = Cepstrum::new(bands);
+        for b in 2..=bands {
+            fewer.set_bands(b);
+            matcher.separating_scratch.waits(
+                &matcher.templates,
+                &matcher.kinds,
+                &fewer,
+                &mut matcher.separating,
+            );
+            let most = matcher.separating.iter().copied().max().unwrap_or(1);
+            matcher.max_windows = matcher.max_windows.max(usize::from(most));
+        }
+        matcher.compare_bands(bands);
         matcher
     }
 
@@ -664,8 +678,6 @@ impl SpectralMatcher {
         }
         self.separating_scratch
             .waits(&self.templates, &self.kinds, cepstrum, &mut self.separating);
-        // The most any pair waits for.
-        self.max_windows = self.separating.iter().copied().max().unwrap_or(1).max(1) as usize;
         self.background.compare_on(&self.background_full, cepstrum);
         self.tracked.forget();
     }
