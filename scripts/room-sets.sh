@@ -68,28 +68,21 @@ case $kind in
         mix=$(IFS=,; echo "${weights[*]}")
         added="$hum_hz Hz hum and 7 harmonics, peaks $level_db dB"
         ;;
-    rate)
+    rate | lowpass)
         [ $# -ge 1 ] && [ $# -le 2 ] || usage
-        new_rate=$1 which=${2:-all}
-        case $new_rate in
-            '' | *[!0-9]*) echo "room-sets.sh: rate $new_rate: expected a sample rate in Hz, such as 16000" >&2; exit 2 ;;
+        hz=$1 which=${2:-all}
+        if [ "$kind" = rate ]; then
+            expected="a sample rate in Hz, such as 16000" after="the rate" made="at $hz Hz"
+        else
+            expected="a frequency in Hz, such as 6300" after="the frequency" made="low-passed at $hz Hz"
+        fi
+        case $hz in
+            '' | *[!0-9]*) echo "room-sets.sh: $kind $hz: expected $expected" >&2; exit 2 ;;
         esac
         case $which in
-            all) added="every file at $new_rate Hz" ;;
-            sequences) added="the sequences at $new_rate Hz, the takes as they were" ;;
-            *) echo "room-sets.sh: rate $new_rate $which: expected nothing or 'sequences' after the rate" >&2; exit 2 ;;
-        esac
-        ;;
-    lowpass)
-        [ $# -ge 1 ] && [ $# -le 2 ] || usage
-        top_hz=$1 which=${2:-all}
-        case $top_hz in
-            '' | *[!0-9]*) echo "room-sets.sh: lowpass $top_hz: expected a frequency in Hz, such as 6300" >&2; exit 2 ;;
-        esac
-        case $which in
-            all) added="every file low-passed at $top_hz Hz" ;;
-            sequences) added="the sequences low-passed at $top_hz Hz, the takes as they were" ;;
-            *) echo "room-sets.sh: lowpass $top_hz $which: expected nothing or 'sequences' after the frequency" >&2; exit 2 ;;
+            all) added="every file $made" ;;
+            sequences) added="the sequences $made, the takes as they were" ;;
+            *) echo "room-sets.sh: $kind $hz $which: expected nothing or 'sequences' after $after" >&2; exit 2 ;;
         esac
         ;;
     gain)
@@ -114,22 +107,16 @@ for set in "$src"/*/; do
     for csv in "$set"/seq_*.csv; do cp "$csv" "$out/$name/"; done
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
-        if [ "$kind" = reverb ]; then
+        if [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
+            cp "$wav" "$out/$name/$rel"
+        elif [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
         elif [ "$kind" = gain ]; then
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" gain "$gain_db"
         elif [ "$kind" = lowpass ]; then
-            if [ "$which" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
-                cp "$wav" "$out/$name/$rel"
-            else
-                sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$top_hz"
-            fi
+            sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$hz"
         elif [ "$kind" = rate ]; then
-            if [ "$which" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
-                cp "$wav" "$out/$name/$rel"
-            else
-                sox -R -V1 "$wav" -b 16 -r "$new_rate" "$out/$name/$rel"
-            fi
+            sox -R -V1 "$wav" -b 16 -r "$hz" "$out/$name/$rel"
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)

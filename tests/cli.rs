@@ -698,6 +698,19 @@ fn listen_in_a_terminal_prints_events_and_a_level_and_as_a_service_only_logs() {
     );
 }
 
+/// The project's WAV at `path` resampled to 16 kHz (a narrow input), and its own rate.
+fn at_16_khz(path: &str) -> (Vec<f32>, u32) {
+    let mut source =
+        onomato::audio::WavSource::open(&root().join(path), onomato::audio::ChannelSelect::Mix)
+            .unwrap();
+    let rate = source.sample_rate();
+    let samples = source.read_all().unwrap();
+    (
+        onomato::audio::resample_clip(&samples, rate, 16_000).unwrap(),
+        rate,
+    )
+}
+
 #[test]
 fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     let tick = "examples/patterns/tick.wav";
@@ -738,11 +751,7 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     // A take recorded at 16 kHz carries sound up to where the resampler's passband ends
     // there, and only the bands under it are compared.
     let dir = temp_dir("check-narrow");
-    let mut source =
-        onomato::audio::WavSource::open(&root().join(tick), onomato::audio::ChannelSelect::Mix)
-            .unwrap();
-    let rate = source.sample_rate();
-    let narrow = onomato::audio::resample_clip(&source.read_all().unwrap(), rate, 16_000).unwrap();
+    let (narrow, _) = at_16_khz(tick);
     let narrow_tick = dir.join("tick-16k.wav");
     common::write_wav_f32(&narrow_tick, &narrow, 16_000);
     let out = onomato(&[
@@ -779,11 +788,7 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
 /// sound, and finds what it finds in the full-band beat.
 #[test]
 fn analyze_follows_a_recording_that_carries_fewer_bands_than_its_takes() {
-    let beat = root().join("examples/beat.wav");
-    let mut source =
-        onomato::audio::WavSource::open(&beat, onomato::audio::ChannelSelect::Mix).unwrap();
-    let rate = source.sample_rate();
-    let narrow = onomato::audio::resample_clip(&source.read_all().unwrap(), rate, 16_000).unwrap();
+    let (narrow, rate) = at_16_khz("examples/beat.wav");
     let back = onomato::audio::resample_clip(&narrow, 16_000, rate).unwrap();
     let dir = temp_dir("analyze-narrow");
     let narrow_beat = dir.join("beat-via-16k.wav");

@@ -17,7 +17,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use super::features::{Cepstrum, BANDS, FEATURES};
+use super::features::{Cepstrum, FEATURES};
 
 /// The built-in model (see the module comment).
 const BUILTIN: &[u8] = include_bytes!("background.bin");
@@ -83,31 +83,26 @@ impl BackgroundModel {
         }
     }
 
-    /// The model as a matcher that compares only `cepstrum`'s bands sees it: each
-    /// template, pooled over every band, taken through [`Cepstrum::refeature`].
-    pub(super) fn compared_on(self, cepstrum: &Cepstrum) -> Self {
-        if cepstrum.bands() == BANDS || self.is_empty() {
-            return self;
-        }
-        debug_assert_eq!(self.features, FEATURES, "a model pooled as a matcher pools");
-        let templates = cepstrum.refeature(&self.templates);
-        Self::new(self.features, self.decision_frames, templates)
-    }
-
     /// A model of its own templates, which [`Self::compare_on`] can make again in place.
     pub(super) fn own_copy(&self) -> Self {
         Self::new(self.features, self.decision_frames, self.templates.to_vec())
     }
 
-    /// This model made again as [`Self::compared_on`] makes `full` (of as many
-    /// templates, pooled over every band), in place when this model's templates are
-    /// its own ([`Self::own_copy`]): while a stream runs, without allocating.
+    /// This model made again as a matcher that compares only `cepstrum`'s bands sees
+    /// `full` (of as many templates, pooled over every band): each template taken
+    /// through [`Cepstrum::refeature_into`]. In place when this model's templates are
+    /// its own ([`Self::own_copy`]), as a matcher's are: while a stream runs, without
+    /// allocating.
     pub(super) fn compare_on(&mut self, full: &Self, cepstrum: &Cepstrum) {
-        match Arc::get_mut(&mut self.templates) {
-            Some(own) if own.len() == full.templates.len() => {
-                cepstrum.refeature_into(&full.templates, own);
-            }
-            _ => *self = full.clone().compared_on(cepstrum),
+        debug_assert!(
+            full.is_empty() || full.features == FEATURES,
+            "a model pooled as a matcher pools"
+        );
+        if Arc::get_mut(&mut self.templates).is_none_or(|own| own.len() != full.templates.len()) {
+            *self = full.own_copy();
+        }
+        if let Some(own) = Arc::get_mut(&mut self.templates) {
+            cepstrum.refeature_into(&full.templates, own);
         }
     }
 

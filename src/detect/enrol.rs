@@ -488,7 +488,7 @@ mod tests {
     use super::*;
     use crate::detect::white_noise;
 
-    /// [`separating_windows`] over decision windows of 5 frames, pairs alike at 0.7.
+    /// [`Separating::waits`] over decision windows of 5 frames, pairs alike at 0.7.
     fn waits(
         templates: &[Template],
         kinds: &[PatternKind],

@@ -309,11 +309,18 @@ impl Cepstrum {
         self.bands
     }
 
+    /// The top of the highest band compared at the working `rate` (Hz) when fewer than
+    /// every band are; `None` when every band is.
+    pub(super) fn top_hz(&self, rate: f64) -> Option<f64> {
+        (self.bands < BANDS).then(|| band_top_hz(rate, self.bands - 1))
+    }
+
     /// The features (unit norm) that `full`, feature vectors one after the other of
     /// spectra pooled over every band, become when only this cepstrum's bands are
     /// compared: each spectrum is recovered from them (up to its level and scale, which
     /// no feature keeps) and taken through this cepstrum. The same features when every
     /// band is compared. For models pooled over every band (the built-in background).
+    #[cfg(test)]
     pub(super) fn refeature(&self, full: &[f32]) -> Vec<f32> {
         let mut out = vec![0.0f32; full.len()];
         self.refeature_into(full, &mut out);

@@ -36,7 +36,7 @@
 //! wins if its score passes its threshold; below, the sound is none of the patterns and
 //! nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
-//! windows, up to `max_decision_seconds` (`separating_windows` in [`super::enrol`],
+//! windows, up to `max_decision_seconds` (`Separating` in [`super::enrol`],
 //! `SpectralMatcher::scores_over`); every gate still judges the first window.
 //! Each onset is decided once, so a sound never gives two events. A
 //! sound whose strength (its amplitude against the take's over the decision window) is
@@ -71,8 +71,8 @@ use super::enrol::{
     SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    band_top_hz, features_of_power, normalise, pool_power, present_bands, similarity, top_hz,
-    Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, present_bands, similarity, top_hz, Analyzer,
+    Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -255,8 +255,7 @@ pub fn compared_top_hz(
     let mut analyzer = Analyzer::new(rate);
     let top = carried_top_hz(&mut analyzer, patterns, settings, input_rate);
     analyzer.compare_under(rate, top);
-    let bands = analyzer.cepstrum.bands();
-    (bands < BANDS).then(|| band_top_hz(rate, bands - 1))
+    analyzer.cepstrum.top_hz(rate)
 }
 
 /// Which of the matcher's held stages: the one whose sounds fired, or the one that
@@ -356,7 +355,7 @@ pub struct SpectralMatcher {
     /// The onset being classified: its best similarity with the background.
     background_score: f32,
     /// Per ordered pair of patterns (row-major): over how many decision windows the
-    /// choice between them is made ([`separating_windows`]).
+    /// choice between them is made ([`Separating`]).
     separating: Vec<u8>,
     /// The most windows any pair waits for, over any bands compared (1: none waits).
     max_windows: usize,
@@ -425,7 +424,7 @@ pub struct OnsetRecord {
     pub guard_by_stopped_speech: bool,
     /// The sound the choice of its pattern was made on, seconds from the onset: one
     /// decision window, or more when its two best patterns are alike over one
-    /// ([`separating_windows`]).
+    /// ([`Separating`]).
     #[serde(serialize_with = "super::opt_seconds")]
     pub window_seconds: Option<f64>,
     pub outcome: Outcome,
@@ -462,7 +461,7 @@ const CONTINUATION_DB: f64 = 6.0;
 
 /// Two patterns whose takes are this alike over a decision window cannot be told
 /// apart there; a choice between them waits for the windows that part them
-/// ([`separating_windows`]). Swept over every dev set (`docs/classify.md`): 0.6 and 0.7
+/// ([`Separating`]). Swept over every dev set (`docs/classify.md`): 0.6 and 0.7
 /// score alike, 0.8 and 0.9 lose the beats' "B" and "Pf", 0.5 and less wait for pairs
 /// that longer windows do not part.
 const ALIKE_SIMILARITY: f32 = 0.7;
@@ -706,8 +705,7 @@ impl SpectralMatcher {
     /// The top of the highest band compared, in Hz, when the input or the takes carry
     /// less than every band (`features::Analyzer::compare_under`); `None` when every band is.
     pub fn compared_top_hz(&self) -> Option<f64> {
-        let bands = self.analyzer.cepstrum.bands();
-        (bands < BANDS).then(|| band_top_hz(self.rate, bands - 1))
+        self.analyzer.cepstrum.top_hz(self.rate)
     }
 
     /// Pairs of patterns whose takes resemble each other over the decision window at
@@ -715,7 +713,7 @@ impl SpectralMatcher {
     /// other's take): pattern names and the best similarity of their takes, most alike
     /// first. Such patterns are easily taken for each other.
     ///
-    /// With each pair that parts later ([`separating_windows`]), how much of a sound
+    /// With each pair that parts later ([`Separating`]), how much of a sound
     /// (seconds from its onset) a choice between the two hears.
     pub fn look_alike_patterns(&self, min_similarity: f32) -> Vec<AlikePair> {
         let mut pairs: Vec<(usize, usize, f32)> = Vec::new();
