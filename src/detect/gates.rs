@@ -30,6 +30,10 @@ pub enum Outcome {
     /// Placed within the onset stage's shortest gap of the last onset that fired: the
     /// same attack found twice (not scored).
     SameOnset,
+    /// Fired later, by its waveform: the sound of an onset that did not fire is one of
+    /// the takes, sample for sample (the copies stage, [`super::copies`]). A second
+    /// record of that onset, dated where the take's onset falls.
+    Copy,
 }
 
 impl Outcome {
@@ -44,6 +48,7 @@ impl Outcome {
             Outcome::HeldContinues => "held_continues",
             Outcome::MinStrength => "min_strength",
             Outcome::SameOnset => "same_onset",
+            Outcome::Copy => "copy",
         }
     }
 }

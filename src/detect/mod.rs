@@ -11,6 +11,7 @@
 pub mod background;
 mod classify;
 mod context;
+mod copies;
 mod enrol;
 mod envelope;
 mod features;

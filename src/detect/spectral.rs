@@ -65,6 +65,7 @@ use serde::Serialize;
 use super::background::BackgroundModel;
 use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
 use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
+use super::copies::Copies;
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
     takes_carry_under_hz, window_power, Separating, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS,
@@ -372,6 +373,9 @@ pub struct SpectralMatcher {
     /// under both.
     carried_top_hz: f64,
     passband: Passband,
+    /// Onsets that did not fire, checked for an exact copy of a take once its sound is
+    /// in ([`Copies`]).
+    copies: Copies,
 }
 
 /// Two patterns whose takes look alike over the decision window
@@ -487,12 +491,20 @@ impl SpectralMatcher {
             (frames_reaching(settings.max_decision_seconds) / decision_frames).max(1);
         let mut templates = Vec::new();
         let mut infos = Vec::new();
+        // Impulse takes and their onsets, for the copies stage.
+        let mut copy_takes = Vec::new();
         for (pi, p) in patterns.iter().enumerate() {
             let mut sustain = vec![0.0f32; BANDS];
             let mut sustain_frames = 0usize;
             let mut power = 0.0f64;
             for take in &p.takes {
                 let (onset, quiet_room_onset) = take_onsets(&take.samples, settings, analyzer.hop);
+                if p.kind == PatternKind::Impulse {
+                    // Compared from the earlier placement: a copy loud enough to be
+                    // checked is placed there at the latest.
+                    let first = quiet_room_onset.map_or(onset, |q| q.min(onset));
+                    copy_takes.push((pi, take.samples.as_slice(), first));
+                }
                 // A held sound swells: a stream places its onset on its soft start when
                 // it stands out of the noise, later when it does not. Both are enrolled.
                 let soft = first_block_within(&take.samples, analyzer.hop, SOFT_ONSET_RANGE_DB);
@@ -569,6 +581,7 @@ impl SpectralMatcher {
             ..GateParams::default()
         };
         let templates_len = templates.len();
+        let copies = Copies::new(copy_takes.into_iter(), rate);
         let mut matcher = Self {
             rate,
             decision_frames,
@@ -638,6 +651,7 @@ impl SpectralMatcher {
             kinds,
             carried_top_hz: carried,
             passband: Passband::new(rate),
+            copies,
         };
         let bands = matcher.analyzer.cepstrum.bands();
         // Whatever bands the stream leaves compared, no pair waits longer than this.
@@ -749,7 +763,8 @@ impl SpectralMatcher {
     /// Longest time from an impulse's onset to its decision, seconds: the decision
     /// frames (as many windows as the most alike pair of patterns waits for) and their
     /// shift, the frames the onset may be placed before its detection (the rise is
-    /// looked for over 6 frames), and one window.
+    /// looked for over 6 frames), and one window. An exact copy that only its waveform
+    /// finds ([`Copies`]) is decided later, once its take's span is in.
     pub fn decision_delay_bound(&self) -> f64 {
         let frames =
             self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
@@ -801,7 +816,7 @@ impl SpectralMatcher {
     /// are at least 20 ms apart and wait at most `max_decision_seconds`, so none on
     /// any input so far).
     pub fn dropped_onsets(&self) -> u64 {
-        self.placer.dropped() + self.pending_dropped
+        self.placer.dropped() + self.pending_dropped + self.copies.dropped()
     }
 
     pub fn finish(&mut self, out: &mut Vec<Event>) {
@@ -813,7 +828,8 @@ impl SpectralMatcher {
             (self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 4)
                 * self.hop()
                 + self.analyzer.win
-                + (self.held.params().gap_seconds * self.rate) as usize;
+                + (self.held.params().gap_seconds * self.rate) as usize
+                + self.copies.reach() as usize;
         let end = self.consumed;
         const ZEROS: [f32; 256] = [0.0; 256];
         let mut left = pad;
@@ -897,6 +913,7 @@ impl SpectralMatcher {
             }
         }
         self.decide_pending(out);
+        self.check_copies(out);
         self.follow_held(f, out);
         self.follow_stopped_held(f);
     }
@@ -1070,6 +1087,12 @@ impl SpectralMatcher {
             }
         }
         if outcome != Outcome::Fired {
+            // What its first window looked like may have misled the gates; what came
+            // before it is the guard's to judge, and a user who plays a take back while
+            // talking turns the guard off.
+            if outcome != Outcome::SpeechGuard {
+                self.copies.wait(time_sample);
+            }
             return None;
         }
         self.last_fired = Some(time_sample);
@@ -1118,9 +1141,57 @@ impl SpectralMatcher {
         });
         if kind == PatternKind::Impulse {
             self.track(pi);
+            self.copies.fired(time_sample, pi);
         }
         out.push(decided);
         None
+    }
+
+    /// Checks each onset that did not fire, once its sound is in, for an exact copy of
+    /// a take ([`Copies`]), and fires the copies found.
+    fn check_copies(&mut self, out: &mut Vec<Event>) {
+        while let Some(onset) = self.copies.due(self.consumed) {
+            let samples = &self.samples;
+            let Some(found) = self.copies.check(onset, |n| samples[ring_slot(samples, n)]) else {
+                continue;
+            };
+            if found.strength < self.gates.min_strength {
+                continue;
+            }
+            // What the copy spans is recognised sound, for the speech guard.
+            self.context
+                .stopped(found.time_sample, found.time_sample + found.len, false);
+            let info = &self.patterns[found.pattern];
+            let event = Event {
+                id: 0,
+                pattern: info.name.clone(),
+                kind: PatternKind::Impulse,
+                time: found.time_sample as f64 / self.rate,
+                end: None,
+                strength: found.strength,
+                score: f64::from(found.similarity),
+                emitted_at: self.consumed as f64 / self.rate,
+                pitch: None,
+            };
+            if let Some(records) = &mut self.explain {
+                records.push(OnsetRecord {
+                    time: event.time,
+                    decided_at: event.emitted_at,
+                    best: Some(event.pattern.clone()),
+                    best_score: Some(event.score),
+                    second: None,
+                    second_score: None,
+                    strength: Some(event.strength),
+                    background_score: None,
+                    rise_db: None,
+                    over_fired_impulse: false,
+                    guard_by_stopped_speech: false,
+                    window_seconds: Some(found.len as f64 / self.rate),
+                    outcome: Outcome::Copy,
+                });
+            }
+            out.push(event);
+        }
     }
 
     /// Scores the onset at `time_sample` (frame `onset_frame`) over its first window and
