@@ -54,7 +54,7 @@ def missed(binary, folder):
                 continue
             onset = min(near, key=lambda o: abs(o["time"] - time))
             outcome = onset["outcome"]
-            outcomes["fired_as_other" if outcome == "fired" else outcome] += 1
+            outcomes["fired_as_other" if outcome in ("fired", "copy") else outcome] += 1
     return truths, outcomes
 
 

@@ -1152,7 +1152,11 @@ impl SpectralMatcher {
     fn check_copies(&mut self, out: &mut Vec<Event>) {
         while let Some(onset) = self.copies.due(self.consumed) {
             let samples = &self.samples;
-            let Some(found) = self.copies.check(onset, |n| samples[ring_slot(samples, n)]) else {
+            let noise_power = self.level_stage.noise_power();
+            let Some(found) = self
+                .copies
+                .check(onset, noise_power, |n| samples[ring_slot(samples, n)])
+            else {
                 continue;
             };
             if found.strength < self.gates.min_strength {
