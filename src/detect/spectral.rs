@@ -45,6 +45,10 @@
 //! has at that time, at that level (the closing "p" of a "pop"): see
 //! `SpectralMatcher::continues_last_impulse`.
 //!
+//! Exact copies: an onset that did not fire (but by the speech guard) is checked once
+//! 0.25 s of its sound is in, by its waveform against each impulse take; a copy of a
+//! take fires its pattern then ([`super::copies`]; outcome `copy`).
+//!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 200 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
 //! inside a sentence follows its words; a missed hit is shorter): the context stage
