@@ -31,7 +31,7 @@ pub enum Outcome {
     /// same attack found twice (not scored).
     SameOnset,
     /// Fired later, by its waveform: the sound of an onset that did not fire is one of
-    /// the takes, sample for sample (the copies stage, [`super::copies`]). A second
+    /// the takes, sample for sample (the copies stage, `src/detect/copies.rs`). A second
     /// record of that onset, dated where the take's onset falls.
     Copy,
 }
