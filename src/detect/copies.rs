@@ -29,6 +29,8 @@ use std::sync::Arc;
 use realfft::num_complex::Complex32;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
+use super::waveform::{correlate, prefix_squares, template_spectrum};
+
 /// How much of a take, from its onset, the comparison holds: long enough that a copy's
 /// soft start is outweighed by its louder later sound, and that a word said again by
 /// the same voice, even a synthetic one, parts from the take. On the development sets'
@@ -61,7 +63,7 @@ struct CopyTake {
     len: usize,
     /// Energy of those samples.
     energy: f64,
-    /// conj(FFT(span)) / (|span| fft_len): the product's inverse FFT is <s, span> / |span|.
+    /// Its [`template_spectrum`], for [`correlate`].
     spectrum: Vec<Complex32>,
 }
 
@@ -105,13 +107,12 @@ pub(super) struct Copies {
 /// Independent samples in `x`: its length over the sum of its squared normalised
 /// autocorrelation (every lag, both signs). A white sound has as many as its length, a
 /// tone a few.
-fn independent_samples(x: &[f32]) -> f64 {
+fn independent_samples(x: &[f32], planner: &mut RealFftPlanner<f32>) -> f64 {
     let n = x.len();
     if n == 0 {
         return 0.0;
     }
     let len = (2 * n).next_power_of_two();
-    let mut planner = RealFftPlanner::<f32>::new();
     let forward = planner.plan_fft_forward(len);
     let inverse = planner.plan_fft_inverse(len);
     let mut padded = vec![0.0f32; len];
@@ -144,42 +145,32 @@ impl Copies {
     ) -> Self {
         let span = (SPAN_SECONDS * rate) as usize;
         let max_lag = (MAX_LAG_SECONDS * rate) as usize;
+        let mut planner = RealFftPlanner::<f32>::new();
+        let enough = (3.0 / f64::from(COPY_SIMILARITY)).powi(2);
+        // A silent span has no independent sample: every take kept has energy.
         let spans: Vec<(usize, &[f32])> = takes
             .filter_map(|(pattern, samples, onset)| {
                 let s = &samples[onset.min(samples.len())..];
                 let s = &s[..s.len().min(span)];
-                let enough = (3.0 / f64::from(COPY_SIMILARITY)).powi(2);
-                (independent_samples(s) >= enough).then_some((pattern, s))
+                (independent_samples(s, &mut planner) >= enough).then_some((pattern, s))
             })
             .collect();
         let longest = spans.iter().map(|(_, s)| s.len()).max().unwrap_or(0);
         let fft_len = (longest + 2 * max_lag).max(2).next_power_of_two();
-        let mut planner = RealFftPlanner::<f32>::new();
         let forward = planner.plan_fft_forward(fft_len);
         let inverse = planner.plan_fft_inverse(fft_len);
-        let mut padded = vec![0.0f32; fft_len];
+        let mut padded = forward.make_input_vec();
         let takes = spans
             .into_iter()
             .map(|(pattern, s)| {
-                padded.fill(0.0);
-                padded[..s.len()].copy_from_slice(s);
                 let energy: f64 = s.iter().map(|&x| f64::from(x).powi(2)).sum();
-                let mut spectrum = forward.make_output_vec();
-                let scale = (energy.sqrt() * fft_len as f64) as f32;
-                if forward.process(&mut padded, &mut spectrum).is_err() || scale <= 0.0 {
-                    spectrum.fill(Complex32::new(0.0, 0.0));
-                }
-                for c in spectrum.iter_mut() {
-                    *c = c.conj() / scale.max(f32::MIN_POSITIVE);
-                }
                 CopyTake {
                     pattern,
                     len: s.len(),
                     energy,
-                    spectrum,
+                    spectrum: template_spectrum(forward.as_ref(), s, energy, &mut padded),
                 }
             })
-            .filter(|t| t.energy > 0.0)
             .collect();
         Self {
             takes,
@@ -258,10 +249,7 @@ impl Copies {
         for (i, s) in self.segment[..filled].iter_mut().enumerate() {
             *s = sample(start + i as u64);
         }
-        self.prefix[0] = 0.0;
-        for i in 0..self.segment.len() {
-            self.prefix[i + 1] = self.prefix[i] + f64::from(self.segment[i]).powi(2);
-        }
+        prefix_squares(&self.segment, &mut self.prefix);
         self.forward
             .process_with_scratch(
                 &mut self.segment,
@@ -271,29 +259,14 @@ impl Copies {
             .ok()?;
         let mut best: Option<Found> = None;
         for take in &self.takes {
-            for ((p, s), t) in self
-                .product
-                .iter_mut()
-                .zip(&self.segment_spectrum)
-                .zip(&take.spectrum)
-            {
-                *p = s * t;
-            }
-            // The inverse of a real signal's spectrum has no imaginary part at 0 and at
-            // the Nyquist bin; rounding can leave one.
-            if let Some(first) = self.product.first_mut() {
-                first.im = 0.0;
-            }
-            if let Some(last) = self.product.last_mut() {
-                last.im = 0.0;
-            }
-            self.inverse
-                .process_with_scratch(
-                    &mut self.product,
-                    &mut self.correlation,
-                    &mut self.inverse_scratch,
-                )
-                .ok()?;
+            correlate(
+                self.inverse.as_ref(),
+                &self.segment_spectrum,
+                &take.spectrum,
+                &mut self.product,
+                &mut self.correlation,
+                &mut self.inverse_scratch,
+            );
             for j in 0..=2 * self.max_lag {
                 let window = self.prefix[j + take.len] - self.prefix[j];
                 if window <= 0.0 {
@@ -418,8 +391,8 @@ mod tests {
         let tone: Vec<f32> = (0..3000)
             .map(|i| (2.0 * std::f64::consts::PI * 56.0 * i as f64 / RATE).sin() as f32)
             .collect();
-        assert!(independent_samples(&tone) < 11.0);
-        assert!(independent_samples(&noise(3000, 3)) > 1000.0);
+        assert!(independent_samples(&tone, &mut RealFftPlanner::new()) < 11.0);
+        assert!(independent_samples(&noise(3000, 3), &mut RealFftPlanner::new()) > 1000.0);
         let copies = Copies::new([(0, tone.as_slice(), 0)].into_iter(), RATE);
         assert!(copies.is_empty());
     }

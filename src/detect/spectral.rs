@@ -438,6 +438,27 @@ pub struct OnsetRecord {
     pub outcome: Outcome,
 }
 
+impl OnsetRecord {
+    /// An onset at `time`, decided at `decided_at`, with nothing scored.
+    fn unscored(time: f64, decided_at: f64, outcome: Outcome) -> Self {
+        Self {
+            time,
+            decided_at,
+            best: None,
+            best_score: None,
+            second: None,
+            second_score: None,
+            strength: None,
+            background_score: None,
+            rise_db: None,
+            over_fired_impulse: false,
+            guard_by_stopped_speech: false,
+            window_seconds: None,
+            outcome,
+        }
+    }
+}
+
 /// One pattern's score for an onset: the best of its takes and of its tracked
 /// template, and which take scored best.
 #[derive(Clone, Copy)]
@@ -960,21 +981,7 @@ impl SpectralMatcher {
             self.consumed as f64 / self.rate,
         );
         if let Some(records) = &mut self.explain {
-            records.push(OnsetRecord {
-                time,
-                decided_at,
-                best: None,
-                best_score: None,
-                second: None,
-                second_score: None,
-                strength: None,
-                background_score: None,
-                rise_db: None,
-                over_fired_impulse: false,
-                guard_by_stopped_speech: false,
-                window_seconds: None,
-                outcome,
-            });
+            records.push(OnsetRecord::unscored(time, decided_at, outcome));
         }
     }
 
@@ -1101,21 +1108,10 @@ impl SpectralMatcher {
         }
         self.last_fired = Some(time_sample);
         let take_length = self.templates[best_template].length_after_onset;
-        let info = &self.patterns[pi];
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
-        let decided = Event {
-            id: 0,
-            pattern: info.name.clone(),
-            kind: info.kind,
-            time: time_sample as f64 / self.rate,
-            end: None,
-            strength,
-            score: f64::from(best_score),
-            emitted_at: self.consumed as f64 / self.rate,
-            pitch: None,
-        };
-        let kind = info.kind;
+        let decided = self.decided(pi, time_sample, strength, best_score);
+        let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
             // A held sound it replaces ends first (a stopped one that was followed as
             // well), so that its end does not close the new one's span.
@@ -1151,6 +1147,22 @@ impl SpectralMatcher {
         None
     }
 
+    /// The event of pattern `pi` whose onset is at `time_sample`, decided now.
+    fn decided(&self, pi: usize, time_sample: u64, strength: f64, score: f32) -> Event {
+        let info = &self.patterns[pi];
+        Event {
+            id: 0,
+            pattern: info.name.clone(),
+            kind: info.kind,
+            time: time_sample as f64 / self.rate,
+            end: None,
+            strength,
+            score: f64::from(score),
+            emitted_at: self.consumed as f64 / self.rate,
+            pitch: None,
+        }
+    }
+
     /// Checks each onset that did not fire, once its sound is in, for an exact copy of
     /// a take ([`Copies`]), and fires the copies found.
     fn check_copies(&mut self, out: &mut Vec<Event>) {
@@ -1169,33 +1181,19 @@ impl SpectralMatcher {
             // What the copy spans is recognised sound, for the speech guard.
             self.context
                 .stopped(found.time_sample, found.time_sample + found.len, false);
-            let info = &self.patterns[found.pattern];
-            let event = Event {
-                id: 0,
-                pattern: info.name.clone(),
-                kind: PatternKind::Impulse,
-                time: found.time_sample as f64 / self.rate,
-                end: None,
-                strength: found.strength,
-                score: f64::from(found.similarity),
-                emitted_at: self.consumed as f64 / self.rate,
-                pitch: None,
-            };
+            let event = self.decided(
+                found.pattern,
+                found.time_sample,
+                found.strength,
+                found.similarity,
+            );
             if let Some(records) = &mut self.explain {
                 records.push(OnsetRecord {
-                    time: event.time,
-                    decided_at: event.emitted_at,
                     best: Some(event.pattern.clone()),
                     best_score: Some(event.score),
-                    second: None,
-                    second_score: None,
                     strength: Some(event.strength),
-                    background_score: None,
-                    rise_db: None,
-                    over_fired_impulse: false,
-                    guard_by_stopped_speech: false,
                     window_seconds: Some(found.len as f64 / self.rate),
-                    outcome: Outcome::Copy,
+                    ..OnsetRecord::unscored(event.time, event.emitted_at, Outcome::Copy)
                 });
             }
             out.push(event);

@@ -206,16 +206,8 @@ impl WaveformMatcher {
             for take in &pattern.takes {
                 let len = take.samples.len();
                 let energy = take.energy();
-                let norm = energy.sqrt().max(f64::MIN_POSITIVE);
-                fft_scratch.iter_mut().for_each(|x| *x = 0.0);
-                fft_scratch[..len].copy_from_slice(&take.samples);
-                let mut spectrum = forward.make_output_vec();
-                // Lengths come from the plan itself, so the transform cannot fail.
-                let _ = forward.process(&mut fft_scratch, &mut spectrum);
-                let scale = (1.0 / (norm * fft_len as f64)) as f32;
-                for c in &mut spectrum {
-                    *c = c.conj() * scale;
-                }
+                let spectrum =
+                    template_spectrum(forward.as_ref(), &take.samples, energy, &mut fft_scratch);
                 let half_window = match settings.suppression_seconds {
                     Some(s) => (s * rate).round() as u64,
                     None => (len / 2) as u64,
@@ -410,19 +402,10 @@ impl WaveformMatcher {
         }
 
         for (ti, tmpl) in self.templates.iter_mut().enumerate() {
-            for ((p, s), t) in self
-                .product
-                .iter_mut()
-                .zip(&self.spectrum)
-                .zip(&tmpl.spectrum)
-            {
-                *p = s * t;
-            }
-            // Real signals: DC and Nyquist bins are real. Keep them exactly so.
-            let last = self.product.len() - 1;
-            self.product[0].im = 0.0;
-            self.product[last].im = 0.0;
-            let _ = self.inverse.process_with_scratch(
+            correlate(
+                self.inverse.as_ref(),
+                &self.spectrum,
+                &tmpl.spectrum,
                 &mut self.product,
                 &mut self.corr,
                 &mut self.scratch_inverse,
@@ -712,10 +695,54 @@ impl WaveformMatcher {
     }
 }
 
+/// A template's spectrum for [`correlate`]: conj(FFT(p)) / (|p| fft_len), `samples` of
+/// `energy` zero-padded to the plan's length in `padded` (as long as the plan's input).
+pub(super) fn template_spectrum(
+    forward: &dyn RealToComplex<f32>,
+    samples: &[f32],
+    energy: f64,
+    padded: &mut [f32],
+) -> Vec<Complex32> {
+    let norm = energy.sqrt().max(f64::MIN_POSITIVE);
+    padded.fill(0.0);
+    padded[..samples.len()].copy_from_slice(samples);
+    let mut spectrum = forward.make_output_vec();
+    // Lengths come from the plan itself, so the transform cannot fail.
+    let _ = forward.process(padded, &mut spectrum);
+    let scale = (1.0 / (norm * padded.len() as f64)) as f32;
+    for c in &mut spectrum {
+        *c = c.conj() * scale;
+    }
+    spectrum
+}
+
+/// The cross-correlation of a segment (its spectrum `segment`) with a template (its
+/// [`template_spectrum`]) into `out`: `out[j]` = <s[j..j + M], p> / |p|, for the lags
+/// where the template does not wrap around the segment. `product` and `scratch` are
+/// the plan's buffers. Allocates nothing.
+pub(super) fn correlate(
+    inverse: &dyn ComplexToReal<f32>,
+    segment: &[Complex32],
+    template: &[Complex32],
+    product: &mut [Complex32],
+    out: &mut [f32],
+    scratch: &mut [Complex32],
+) {
+    for ((p, s), t) in product.iter_mut().zip(segment).zip(template) {
+        *p = s * t;
+    }
+    // Real signals: DC and Nyquist bins are real. Keep them exactly so.
+    let last = product.len() - 1;
+    product[0].im = 0.0;
+    product[last].im = 0.0;
+    // Buffer lengths come from the plan, so the transform cannot fail.
+    let _ = inverse.process_with_scratch(product, out, scratch);
+}
+
 /// `out[i]` = sum of `x[..i]²` in f64 (`out.len() == x.len() + 1`). The four quarters
 /// of `x` are summed as independent chains in one pass (four times the throughput of a
 /// single dependent chain), then each quarter is offset by the ones before it.
-fn prefix_squares(x: &[f32], out: &mut [f64]) {
+pub(super) fn prefix_squares(x: &[f32], out: &mut [f64]) {
     debug_assert_eq!(out.len(), x.len() + 1);
     let sq = |v: f32| f64::from(v) * f64::from(v);
     let q = x.len() / 4;
