@@ -8,9 +8,9 @@
 //! goes on and then while it dies away, until a new sound rises out of it
 //! ([`Context::follow`]); a held sound covers up to its end, then its sound dying away
 //! the same way for as long as the guard looks back; a pattern's sound
-//! that only the guard stopped covers its take's length too (a held one, up to the end
-//! the held stage finds for it, then as it dies away), so that only sounds that are
-//! none of the patterns keep the guard closed. The one exception passes a stop on once
+//! that only the guard stopped covers its take's length too, or less where a new sound
+//! rises out of it (a held one, up to the end the held stage finds for it, then as it
+//! dies away), so that only sounds that are none of the patterns keep the guard closed. The one exception passes a stop on once
 //! at most: a sound the guard stopped on such sound, and that lies as near speech as to
 //! its pattern, is the same talk going on and counts as unrecognised (`near_speech`, in
 //! [`Context::stopped`] and [`Context::held_began`]), but what it alone closes the guard
@@ -105,16 +105,49 @@ impl Span {
     }
 }
 
+/// A recognised sound's level since its onset: it goes on while within `SOUND_DROP_DB`
+/// of its peak, then dies away until a new sound rises out of it.
+#[derive(Debug, Clone, Copy)]
+struct Fading {
+    peak_db: f32,
+    /// Once the sound has fallen `SOUND_DROP_DB` under its peak: the lowest level since.
+    lowest_db: Option<f32>,
+}
+
+impl Fading {
+    /// Takes the next frame's level; whether a new sound rose `new_sound_db` over the
+    /// lowest the sound fell to.
+    fn new_sound(&mut self, level_db: f32, new_sound_db: f32) -> bool {
+        if self.lowest_db.is_some() || level_db < self.peak_db - SOUND_DROP_DB {
+            let lowest = self.lowest_db.unwrap_or(level_db);
+            if level_db > lowest + new_sound_db {
+                return true;
+            }
+            self.lowest_db = Some(lowest.min(level_db));
+        }
+        self.peak_db = self.peak_db.max(level_db);
+        false
+    }
+}
+
 /// The newest recognised impulse (or held sound that has ended), whose span grows while
 /// its sound goes on or dies away.
 #[derive(Debug, Clone, Copy)]
 struct Growing {
     slot: usize,
-    peak_db: f32,
-    /// Once the sound has fallen `SOUND_DROP_DB` under its peak: the lowest level since.
-    lowest_db: Option<f32>,
+    level: Fading,
     /// Last sample the span may reach.
     limit: u64,
+}
+
+/// The newest impulse the guard stopped, whose span ends early where a new sound rises
+/// out of it.
+#[derive(Debug, Clone, Copy)]
+struct Stopped {
+    slot: usize,
+    /// The span's first sample: whether its slot still holds it.
+    from: u64,
+    level: Fading,
 }
 
 /// See the module comment.
@@ -126,6 +159,7 @@ pub(super) struct Context {
     spans: [Span; SPANS],
     next: usize,
     growing: Option<Growing>,
+    stopped: Option<Stopped>,
 }
 
 impl Context {
@@ -137,6 +171,7 @@ impl Context {
             spans: [Span::NONE; SPANS],
             next: 0,
             growing: None,
+            stopped: None,
         }
     }
 
@@ -156,6 +191,22 @@ impl Context {
         });
     }
 
+    /// An impulse that only the guard stopped, whose sound peaked at `peak_db` (dB),
+    /// covers samples `from..=to` as [`Context::stopped`], but ends where a new sound
+    /// rises out of it ([`Context::follow`]): in speech its take's length holds the
+    /// syllables after it, which are not its sound.
+    pub(super) fn stopped_impulse(&mut self, from: u64, to: u64, near_speech: bool, peak_db: f32) {
+        self.stopped(from, to, near_speech);
+        self.stopped = Some(Stopped {
+            slot: (self.next + SPANS - 1) % SPANS,
+            from,
+            level: Fading {
+                peak_db,
+                lowest_db: None,
+            },
+        });
+    }
+
     /// An impulse that fired, whose sound peaked at `peak_db` (dB), covers samples
     /// `from..=to`, and longer while its sound goes on or dies away, up to sample
     /// `limit` ([`Context::follow`]).
@@ -168,8 +219,10 @@ impl Context {
         });
         self.growing = Some(Growing {
             slot,
-            peak_db,
-            lowest_db: None,
+            level: Fading {
+                peak_db,
+                lowest_db: None,
+            },
             limit,
         });
     }
@@ -187,8 +240,10 @@ impl Context {
             self.spans[slot].to = end;
             self.growing = Some(Growing {
                 slot,
-                peak_db: level_db,
-                lowest_db: Some(level_db),
+                level: Fading {
+                    peak_db: level_db,
+                    lowest_db: Some(level_db),
+                },
                 limit,
             });
         }
@@ -221,21 +276,27 @@ impl Context {
     /// the quiet-before gate's measure. A word's tail in a room, or under the next word
     /// of a quick rhythm, is still that word's sound, not unrecognised sound before the
     /// next onset (`docs/speech-guard.md`, "A recognised sound as it dies away").
+    /// The newest impulse the guard stopped, by the same measure, ends before a new
+    /// sound that rises out of it within its take's length ("A sound the guard stopped,
+    /// ended where a new sound rises out of it").
     pub(super) fn follow(&mut self, centre: u64, end: u64, level_db: f32) {
-        let Some(mut g) = self.growing else { return };
-        if centre > g.limit {
-            self.growing = None;
+        let new_sound_db = self.params.new_sound_db;
+        if let Some(mut s) = self.stopped.take() {
+            let span = &mut self.spans[s.slot];
+            if span.from == s.from && centre <= span.to {
+                if s.level.new_sound(level_db, new_sound_db) {
+                    span.to = centre.saturating_sub(1).max(span.from);
+                } else {
+                    self.stopped = Some(s);
+                }
+            }
+        }
+        let Some(mut g) = self.growing.take() else {
+            return;
+        };
+        if centre > g.limit || g.level.new_sound(level_db, new_sound_db) {
             return;
         }
-        if g.lowest_db.is_some() || level_db < g.peak_db - SOUND_DROP_DB {
-            let lowest = g.lowest_db.unwrap_or(level_db);
-            if level_db > lowest + self.params.new_sound_db {
-                self.growing = None;
-                return;
-            }
-            g.lowest_db = Some(lowest.min(level_db));
-        }
-        g.peak_db = g.peak_db.max(level_db);
         let span = &mut self.spans[g.slot];
         span.to = span.to.max(end);
         self.growing = Some(g);
@@ -461,6 +522,42 @@ mod tests {
             !c.recognised_at(302),
             "once ended, the span does not grow again"
         );
+    }
+
+    #[test]
+    fn a_stopped_impulse_covers_its_take_unless_a_new_sound_rises_out_of_it() {
+        // A syllable the guard stopped, its take 200 frames long: it falls 25 dB and
+        // the next syllable rises 15 dB out of the dip at frame 150.
+        let mut c = context();
+        c.stopped_impulse(0, 199, false, -10.0);
+        for centre in 0..200 {
+            let level = match centre {
+                0..=99 => -10.0 - 25.0 * centre as f32 / 99.0,
+                100..=149 => -35.0,
+                _ => -20.0,
+            };
+            c.follow(centre, centre, level);
+        }
+        assert!(c.recognised_at(149) && !c.recognised_at(150));
+        assert!(!c.fired_at(100), "a stopped sound is recognised, not fired");
+        // Its own sound going on, or dying away without a new sound, is covered to the
+        // take's end, and no further.
+        let mut c = context();
+        c.stopped_impulse(0, 199, false, -10.0);
+        for centre in 0..300 {
+            c.follow(centre, centre, -10.0 - 40.0 * centre as f32 / 299.0);
+        }
+        assert!(c.recognised_at(199) && !c.recognised_at(200));
+        // A newer span in its slot is left alone.
+        let mut c = context();
+        c.stopped_impulse(0, 199, false, -10.0);
+        for k in 1..SPANS as u64 {
+            c.stopped(1000 * k, 1000 * k + 10, false);
+        }
+        c.stopped(5000, 6000, false);
+        c.follow(100, 100, -40.0);
+        c.follow(5100, 5100, -20.0);
+        assert!(c.recognised_at(5100) && c.recognised_at(6000));
     }
 
     #[test]

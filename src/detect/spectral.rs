@@ -1094,7 +1094,8 @@ impl SpectralMatcher {
                     .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
             } else {
                 let to = time_sample + self.templates[best_template].length_after_onset;
-                self.context.stopped(covered_from, to, near_speech);
+                self.context
+                    .stopped_impulse(covered_from, to, near_speech, rise_peak);
             }
         }
         if outcome != Outcome::Fired {
