@@ -260,6 +260,24 @@ mod tests {
     }
 
     #[test]
+    fn a_model_compared_on_fewer_bands_scores_its_new_templates_to_the_bit() {
+        use super::super::features::BANDS;
+        let full = BackgroundModel::builtin();
+        let mut narrow = full.own_copy();
+        for bands in [BANDS - 6, BANDS - 12] {
+            narrow.compare_on(&full, &Cepstrum::new(bands));
+            let probe = &full.templates()[..FEATURES];
+            let one_by_one = narrow
+                .templates()
+                .chunks_exact(FEATURES)
+                .map(|t| dot(t, probe))
+                .fold(f32::NEG_INFINITY, f32::max);
+            assert_eq!(narrow.nearest(probe).to_bits(), one_by_one.to_bits());
+            assert_ne!(narrow.templates(), full.templates());
+        }
+    }
+
+    #[test]
     fn the_builtin_model_parses_and_is_not_empty() {
         let parsed = BackgroundModel::from_bytes(BUILTIN).expect("the embedded model parses");
         assert!(parsed.len() > 100, "{} templates", parsed.len());
