@@ -36,6 +36,10 @@ pub(super) struct Template {
     /// Length of the take from its onset, samples: how long an instance is taken to
     /// last when judging the context of the next onset.
     pub(super) length_after_onset: u64,
+    /// How far this placement lies after the earlier one a quiet room gives the take
+    /// (an impulse's; 0 for that one and any other), samples: an instance this template
+    /// finds began that much before where it was placed.
+    pub(super) after_earlier: u64,
     /// The take's own later sounds: pooled power spectra as `pooled_power`, and
     /// energy over the decision window, from every frame after the onset frame
     /// (`[k - 1]`: k frames after it) to the end of the take.
@@ -592,6 +596,7 @@ mod tests {
             drawn_towards: None,
             early_energy: t.early_energy,
             length_after_onset: take.len() as u64,
+            after_earlier: 0,
             later_power: t.later_power,
             later_energy: t.later_energy,
         }

@@ -562,6 +562,12 @@ impl SpectralMatcher {
                         drawn_towards: None,
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
+                        after_earlier: match (second_placement, quiet_room_onset) {
+                            (false, Some(early)) if p.kind == PatternKind::Impulse => {
+                                start.saturating_sub(early) as u64
+                            }
+                            _ => 0,
+                        },
                         later_power,
                         later_energy,
                     });
@@ -789,7 +795,9 @@ impl SpectralMatcher {
     /// frames (as many windows as the most alike pair of patterns waits for) and their
     /// shift, the frames the onset may be placed before its detection (the rise is
     /// looked for over 6 frames), and one window. An exact copy that only its waveform
-    /// finds ([`Copies`]) is decided later, once its take's span is in.
+    /// finds ([`Copies`]) is decided later, once its take's span is in, and an impulse
+    /// dated back to its take's earlier placement (its soft start lost) by that much
+    /// more.
     pub fn decision_delay_bound(&self) -> f64 {
         let frames =
             self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
@@ -1111,7 +1119,11 @@ impl SpectralMatcher {
         let take_length = self.templates[best_template].length_after_onset;
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
-        let decided = self.decided(pi, time_sample, strength, best_score);
+        // An impulse found by the later placement of a take that a quiet room places
+        // earlier began that much before where it was placed: its soft start was lost
+        // under the room or the last sound's tail. It is dated there, as a copy is.
+        let began = time_sample.saturating_sub(self.templates[best_template].after_earlier);
+        let decided = self.decided(pi, began, strength, best_score);
         let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
             // A held sound it replaces ends first (a stopped one that was followed as
