@@ -36,9 +36,11 @@ pub(super) struct Template {
     /// Length of the take from its onset, samples: how long an instance is taken to
     /// last when judging the context of the next onset.
     pub(super) length_after_onset: u64,
-    /// How far this placement lies after the earlier one a quiet room gives the take
-    /// (an impulse's; 0 for that one and any other), samples: an instance this template
-    /// finds began that much before where it was placed.
+    /// How far this placement lies after the earlier one a quiet room gives the take,
+    /// samples, when that is at least the decision window's frames (an impulse's; 0
+    /// for that one, any closer and any other): an instance this template finds began
+    /// that much before where it was placed. Closer, the two templates pool mostly the
+    /// same frames, and which scores best says little about where an instance began.
     pub(super) after_earlier: u64,
     /// The take's own later sounds: pooled power spectra as `pooled_power`, and
     /// energy over the decision window, from every frame after the onset frame

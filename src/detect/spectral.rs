@@ -563,8 +563,11 @@ impl SpectralMatcher {
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
                         after_earlier: match (second_placement, quiet_room_onset) {
-                            (false, Some(early)) if p.kind == PatternKind::Impulse => {
-                                start.saturating_sub(early) as u64
+                            (false, Some(early))
+                                if p.kind == PatternKind::Impulse
+                                    && start >= early + decision_frames * analyzer.hop =>
+                            {
+                                (start - early) as u64
                             }
                             _ => 0,
                         },
