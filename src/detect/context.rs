@@ -10,11 +10,12 @@
 //! the same way for as long as the guard looks back; a pattern's sound
 //! that only the guard stopped covers its take's length too, or less where a new sound
 //! rises out of it (a held one, up to the end the held stage finds for it, then as it
-//! dies away), so that only sounds that are none of the patterns keep the guard closed. The one exception passes a stop on once
-//! at most: a sound the guard stopped on such sound, and that lies as near speech as to
-//! its pattern, is the same talk going on and counts as unrecognised (`near_speech`, in
-//! [`Context::stopped`] and [`Context::held_began`]), but what it alone closes the guard
-//! on covers again ([`Guard::ClosedByStopped`]). The guard judges only the frames of
+//! dies away), so that only sounds that are none of the patterns keep the guard closed.
+//! The one exception passes a stop on once at most: a sound the guard stopped on such
+//! sound, and that lies as near speech as to its pattern, is the same talk going on and
+//! counts as unrecognised (`near_speech`, in [`Context::stopped`] and
+//! [`Context::held_began`]), but what it alone closes the guard on covers again
+//! ([`Guard::ClosedByStopped`]). The guard judges only the frames of
 //! its span before an onset, so it opens within two of its spans and a stopped sound's
 //! length of the last sound no pattern recognised, whatever follows.
 //!
@@ -196,9 +197,14 @@ impl Context {
     /// rises out of it ([`Context::follow`]): in speech its take's length holds the
     /// syllables after it, which are not its sound.
     pub(super) fn stopped_impulse(&mut self, from: u64, to: u64, near_speech: bool, peak_db: f32) {
-        self.stopped(from, to, near_speech);
+        let slot = self.push(Span {
+            from,
+            to,
+            fired: false,
+            near_speech,
+        });
         self.stopped = Some(Stopped {
-            slot: (self.next + SPANS - 1) % SPANS,
+            slot,
             from,
             level: Fading {
                 peak_db,
