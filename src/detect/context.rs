@@ -182,14 +182,14 @@ impl Context {
 
     /// A pattern's sound that only the guard stopped covers samples `from..=to`; one
     /// `near_speech` (as near speech as to its pattern, stopped on sound no pattern
-    /// recognised) as unrecognised sound ([`Context::guard`]).
-    pub(super) fn stopped(&mut self, from: u64, to: u64, near_speech: bool) {
+    /// recognised) as unrecognised sound ([`Context::guard`]); returns its span's slot.
+    pub(super) fn stopped(&mut self, from: u64, to: u64, near_speech: bool) -> usize {
         self.push(Span {
             from,
             to,
             fired: false,
             near_speech,
-        });
+        })
     }
 
     /// An impulse that only the guard stopped, whose sound peaked at `peak_db` (dB),
@@ -197,12 +197,7 @@ impl Context {
     /// rises out of it ([`Context::follow`]): in speech its take's length holds the
     /// syllables after it, which are not its sound.
     pub(super) fn stopped_impulse(&mut self, from: u64, to: u64, near_speech: bool, peak_db: f32) {
-        let slot = self.push(Span {
-            from,
-            to,
-            fired: false,
-            near_speech,
-        });
+        let slot = self.stopped(from, to, near_speech);
         self.stopped = Some(Stopped {
             slot,
             from,
