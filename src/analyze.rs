@@ -200,20 +200,30 @@ pub fn write_json(
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most
 /// with their scores, its strength, the nearest background sound's score, its rise
-/// (marked `*` when it began over an impulse that fired), how much of its sound the
-/// choice of its pattern heard, and what became of it (`--explain`, on stderr).
+/// (marked `*` when it began over an impulse that fired), over such a word's tail the
+/// share of its sound its pattern's takes explain there (`new`), how much of its sound
+/// the choice of its pattern heard, and what became of it (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  outcome",
-        "onset s", "best", "score", "second", "score", "strength", "speech", "rise dB", "heard ms"
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  outcome",
+        "onset s",
+        "best",
+        "score",
+        "second",
+        "score",
+        "strength",
+        "speech",
+        "rise dB",
+        "new",
+        "heard ms"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>8}  {}{}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {}{}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -225,6 +235,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
                 let over_a_word = if r.over_fired_impulse { "*" } else { "" };
                 format!("{v:.1}{over_a_word}")
             }),
+            num(r.explained_over_tail),
             r.window_seconds
                 .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
             r.outcome.as_str(),

@@ -892,7 +892,11 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             .as_bool()
             .unwrap_or_else(|| panic!("no over_fired_impulse: {o}"));
         let impulse = held.iter().all(|name| o["best"] != *name);
-        let excused = over_a_word && impulse && o["best_score"].as_f64().unwrap() >= 0.95;
+        // A clear instance, or one whose take explains what is new over the tail.
+        let explained = o["explained_over_tail"].as_f64().unwrap_or(0.0);
+        let excused = over_a_word
+            && impulse
+            && (o["best_score"].as_f64().unwrap() >= 0.95 || explained >= 0.85);
         assert_eq!(
             o["outcome"] == "quiet_before",
             rise < 10.0 && !excused,
@@ -900,12 +904,18 @@ fn explain_lists_every_onset_with_what_became_of_it() {
         );
     }
     // Every scored onset says how much of its sound the choice of its pattern heard:
-    // about the decision window (25 ms) here, where no two patterns begin alike.
+    // about the decision window (25 ms) here, where no two patterns begin alike, or
+    // two over a fired word's tail, where what a take adds to it is judged.
     for o in onsets.iter().filter(|o| o["outcome"] != "same_onset") {
         let heard = o["window_seconds"]
             .as_f64()
             .unwrap_or_else(|| panic!("no window_seconds: {o}"));
-        assert!((0.015..=0.03).contains(&heard), "{o}");
+        let most = if o["explained_over_tail"].is_number() {
+            0.045
+        } else {
+            0.03
+        };
+        assert!((0.015..=most).contains(&heard), "{o}");
     }
     // The same, as a table on stderr.
     let table = stderr(&out);

@@ -688,8 +688,7 @@ fn words_said_on_a_rhythm_at_150_bpm_are_each_found() {
 /// second said 0.2 s after a short first one ("tick" or "pop", eighth notes at 150
 /// bpm, the words at about their enrolled speed, so the first has not died away): both
 /// are found, and the second fires over the first's tail although it rose less than
-/// the quiet-before gate asks. (A word said over the vowel of a longer one, 0.2 s into
-/// a "boom", is not found yet: its first window holds as much of the vowel as of it.)
+/// the quiet-before gate asks.
 #[test]
 fn a_word_said_over_the_tail_of_a_word_that_fired_is_found() {
     let dir = temp_dir("overlap");
@@ -732,6 +731,48 @@ fn a_word_said_over_the_tail_of_a_word_that_fired_is_found() {
         over_a_tail >= 2,
         "{over_a_tail} words fired over a word's tail without rising 10 dB:\n{table}"
     );
+}
+
+/// Issue: the paper's rhythm with the words said at their enrolled speed: each begins
+/// while the one before still sounds, so its first window is mostly the last word's
+/// tail. The voice's "tick", "pop" and "boom" at 160 words a minute on the tune above,
+/// three times over: at least 0.75 F1 (0.41 when such a word was judged by how its
+/// first window matched alone). Not yet the issue's 0.95: most of the words missed
+/// begin 0.2 s into a "boom", over its vowel at full level.
+#[test]
+fn words_said_at_their_own_speed_on_a_rhythm_at_150_bpm_are_found() {
+    let dir = temp_dir("rhythm-overlap");
+    let settings = spectral();
+    let patterns = without(impulses(enrolled_words(&dir, &settings)), "pew");
+    let names = ["tick", "pop", "boom"];
+    let said: Vec<Vec<f32>> = names
+        .iter()
+        .map(|n| word(&dir, &format!("{n}-said"), n, "160"))
+        .collect();
+    let beats = [
+        1.0, 0.5, 0.5, 1.0, 0.5, 0.5, 1.0, 1.0, 0.5, 0.5, 0.5, 0.5, 2.0,
+    ];
+    let beat_seconds = 60.0 / 150.0;
+    let mut rng = Rng::new(45);
+    let mut at = 0.5;
+    let mut placements = Vec::new();
+    for b in beats.iter().chain(&beats).chain(&beats) {
+        let which = (rng.next_u64() % names.len() as u64) as usize;
+        placements.push((which, at, 10f32.powf(rng.range(-6.0, 0.0) as f32 / 20.0)));
+        at += b * beat_seconds;
+    }
+    let mut rec = vec![0.0f32; samples_for(at + 1.0, RATE)];
+    let mut truth = Vec::new();
+    for (which, at, gain) in placements {
+        place(&mut rec, &said[which], samples_for(at, RATE), gain);
+        truth.push((names[which], at));
+    }
+    add_noise(&mut rec, 0.0005, 46);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let (f1, account) = f1_against(&events, &truth);
+    assert!(f1 >= 0.75, "F1 {f1:.3}: {account}\n{}", explained(&mut det));
 }
 
 /// Issue: a voice whose "p" lasts nearly as long as the wait (espeak-ng's at 130 words a

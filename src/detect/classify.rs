@@ -1,7 +1,9 @@
 //! The classification stage's comparison: a take heard in the room of the onset it is
-//! compared with, and the templates that follow each impulse pattern as its user makes
-//! it lately ([`Tracked`]). The matcher calls both on the detector thread, with
-//! buffers made when it is built; nothing here allocates per onset.
+//! compared with, the templates that follow each impulse pattern as its user makes it
+//! lately ([`Tracked`]), and how much of an onset's sound over the tail of a word that
+//! fired a take explains ([`share_explained_over_tail`]). The matcher calls them on the
+//! detector thread, with buffers made when it is built; nothing here allocates per
+//! onset.
 //!
 //! A take is enrolled in one room and an onset is heard in another. Where the onset's
 //! room is noisy, the bands its sound leaves quiet hold the room's noise, while the
@@ -12,7 +14,9 @@
 //! power spectrum, scaled to the onset's sound, plus the room's noise. In a quiet room
 //! that is the take as enrolled.
 
-use super::features::{features_of_power, scale_to_unit, Analyzer, Cepstrum, BANDS};
+use super::features::{
+    features_of_power, scale_to_unit, Analyzer, Cepstrum, BANDS, POOLED_RANGE_DB,
+};
 use super::onset::OnsetParams;
 use super::spectral::run_onset_stage;
 use super::{white_noise, NOISE_SEED};
@@ -88,6 +92,11 @@ impl Room {
             onset_above_noise: 0.0,
             heard: vec![0.0; bands],
         }
+    }
+
+    /// Per band: the room's noise power, as last set.
+    pub(super) fn noise(&self) -> &[f32] {
+        &self.noise
     }
 
     /// The room's noise from the onset stage's per-band floors.
@@ -234,6 +243,86 @@ impl Tracked {
     }
 }
 
+/// The tail of the word before is tried at levels this many dB apart...
+const OVER_TAIL_STEP_DB: f32 = 2.0;
+/// ...within this many dB of its mean over the quiet-before span (a vowel's level moves
+/// about as much over a decision window)...
+const OVER_TAIL_TAIL_DB: f32 = 10.0;
+/// ...and a take from this far under the onset's power (absent)...
+const OVER_TAIL_TAKE_UNDER_DB: f32 = 40.0;
+/// ...to this far over it.
+const OVER_TAIL_TAKE_OVER_DB: f32 = 20.0;
+
+/// How much of what is new in an onset's sound, over the word before it, a take
+/// explains. A word said while the last one is still sounding begins over its tail:
+/// the onset's window holds both, and the tail is most of its power, so the onset's
+/// features resemble the tail whatever began (`docs/quiet-before.md`). Here the
+/// onset's pooled power spectrum `onset`, in dB floored as features are, is fitted
+/// once by the room's `noise` plus the sound before it (`before`, its mean power over
+/// the quiet-before span) at some level, and once with the take's pooled power `take`
+/// added at some level; the result is the share of the first fit's mean squared error
+/// (dB²) that the take removes. Near 1, the onset is that take begun over the tail;
+/// near 0, the tail alone explains the onset as well (a word's own later sound), or the
+/// take adds nothing like what is new. Levels are tried on a grid of
+/// `OVER_TAIL_STEP_DB` (the fit is of floored dB, so the take's best level may lie over
+/// its share of the power); over the first `bands` bands. Allocates nothing.
+pub(super) fn share_explained_over_tail(
+    onset: &[f32],
+    before: &[f32],
+    noise: &[f32],
+    take: &[f32],
+    bands: usize,
+) -> f32 {
+    let bands = bands.min(BANDS);
+    let db = |p: f32| 10.0 * (p + 1e-12).log10();
+    let mut heard = [0.0f32; BANDS];
+    for (h, p) in heard.iter_mut().zip(onset).take(bands) {
+        *h = db(*p);
+    }
+    let loudest = heard[..bands]
+        .iter()
+        .cloned()
+        .fold(f32::NEG_INFINITY, f32::max);
+    let lowest = loudest - POOLED_RANGE_DB;
+    for h in heard[..bands].iter_mut() {
+        *h = h.max(lowest);
+    }
+    let error = |model: &dyn Fn(usize) -> f32| {
+        (0..bands)
+            .map(|b| (heard[b] - db(model(b)).max(lowest)).powi(2))
+            .sum::<f32>()
+            / bands.max(1) as f32
+    };
+    let gain = |db: f32| 10f32.powf(db / 10.0);
+    let onset_total: f32 = onset.iter().take(bands).sum();
+    let take_total: f32 = take.iter().take(bands).sum();
+    if take_total <= 0.0 || onset_total <= 0.0 {
+        return 0.0;
+    }
+    let take_at_onset = onset_total / take_total;
+    let steps = |from: f32, to: f32| {
+        let n = ((to - from) / OVER_TAIL_STEP_DB).round() as usize;
+        (0..=n).map(move |i| from + i as f32 * OVER_TAIL_STEP_DB)
+    };
+    let (mut tail_alone, mut with_take) = (f32::INFINITY, f32::INFINITY);
+    for tail_db in steps(-OVER_TAIL_TAIL_DB, OVER_TAIL_TAIL_DB) {
+        let a = gain(tail_db);
+        let mut base = [0.0f32; BANDS];
+        for b in 0..bands {
+            base[b] = noise[b] + a * before[b];
+        }
+        tail_alone = tail_alone.min(error(&|b| base[b]));
+        for take_db in steps(-OVER_TAIL_TAKE_UNDER_DB, OVER_TAIL_TAKE_OVER_DB) {
+            let g = take_at_onset * gain(take_db);
+            with_take = with_take.min(error(&|b| base[b] + g * take[b]));
+        }
+    }
+    if tail_alone <= 0.0 {
+        return 0.0;
+    }
+    ((tail_alone - with_take) / tail_alone).max(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::features::{pool_power, similarity, Cepstrum, FEATURES};
@@ -258,6 +347,50 @@ mod tests {
                 .unwrap(),
         );
         assert!(ratio[narrow] > 2.0 * ratio[wide], "{ratio:?}");
+    }
+
+    /// Spectra on the mel bands: a vowel's (its power in the low bands), a burst's (in
+    /// the high ones) and the room's.
+    fn vowel() -> Vec<f32> {
+        (0..BANDS)
+            .map(|b| if b < 10 { 1.0 } else { 1e-4 })
+            .collect()
+    }
+    fn burst() -> Vec<f32> {
+        (0..BANDS)
+            .map(|b| if b >= 16 { 0.5 + 0.02 * b as f32 } else { 1e-5 })
+            .collect()
+    }
+    fn mix(parts: &[(f32, &[f32])]) -> Vec<f32> {
+        (0..BANDS)
+            .map(|b| 1e-6 + parts.iter().map(|(g, p)| g * p[b]).sum::<f32>())
+            .collect()
+    }
+
+    #[test]
+    fn a_take_begun_over_a_tail_explains_what_the_tail_does_not_and_nothing_more() {
+        let (vowel, burst, noise) = (vowel(), burst(), vec![1e-6; BANDS]);
+        let share = |onset: &[f32], take: &[f32]| {
+            share_explained_over_tail(onset, &vowel, &noise, take, BANDS)
+        };
+        // A burst 10 dB under the vowel begun over it, the vowel 1 dB down since.
+        let burst_over_tail = mix(&[(0.8, &vowel), (0.1, &burst)]);
+        assert!(
+            share(&burst_over_tail, &burst) > 0.9,
+            "{}",
+            share(&burst_over_tail, &burst)
+        );
+        // The vowel's own take adds nothing the tail does not explain.
+        assert!(
+            share(&burst_over_tail, &vowel) < 0.1,
+            "{}",
+            share(&burst_over_tail, &vowel)
+        );
+        // The tail alone, fading: no take explains anything more.
+        let tail = mix(&[(0.5, &vowel)]);
+        assert!(share(&tail, &burst) < 0.05, "{}", share(&tail, &burst));
+        // Nothing to compare: no share.
+        assert_eq!(share(&burst_over_tail, &[0.0; BANDS]), 0.0);
     }
 
     /// The pooled power spectrum of `frames` frames of `x` from sample `from`.

@@ -248,7 +248,7 @@ impl Analyzer {
 }
 
 /// Pooled bands are floored this far below the loudest pooled band.
-const POOLED_RANGE_DB: f32 = 50.0;
+pub(super) const POOLED_RANGE_DB: f32 = 50.0;
 /// Length of a feature vector: the cepstral coefficients of the pooled spectrum (the
 /// first, its mean level, always 0).
 pub(super) const FEATURES: usize = BANDS;

@@ -13,7 +13,8 @@ pub enum Outcome {
     Fired,
     /// The 5-40 ms before the onset were within `pre_quiet_db` of its peak: it
     /// continues a sound (a consonant after a vowel). Not asked of an impulse that
-    /// scores `over_fired_score` over the tail of an impulse that fired.
+    /// scores `over_fired_score`, or whose takes explain `over_tail_share` of its
+    /// sound, over the tail of an impulse that fired.
     QuietBefore,
     /// The speech guard: it follows unrecognised sound.
     SpeechGuard,
@@ -67,6 +68,13 @@ pub struct GateParams {
     /// sound is what a word's vowel is made of, so only clear impulses qualify. The
     /// sweep and the scores behind it: `docs/quiet-before.md`.
     pub over_fired_score: f32,
+    /// ...or one of its takes, added to that tail, explains at least this share of
+    /// the onset's sound that the tail alone leaves unexplained
+    /// (`share_explained_over_tail` in the classification stage). The onset's
+    /// features are then mostly the tail's: such an onset is named by that share, and
+    /// neither the threshold nor the background, which judge those features, stops it.
+    /// Swept in `docs/quiet-before.md` ("What a take adds to the tail").
+    pub over_tail_share: f32,
     /// A sound whose nearest background sound scores this much more than its best
     /// pattern is taken for speech (`docs/background.md`).
     pub background_margin: f32,
@@ -79,6 +87,7 @@ impl Default for GateParams {
         Self {
             pre_quiet_db: 10.0,
             over_fired_score: 0.95,
+            over_tail_share: 0.85,
             background_margin: 0.06,
             min_strength: 0.06,
         }
@@ -99,6 +108,9 @@ pub struct Evidence {
     /// The best pattern's score, whether it is an impulse, and its threshold.
     pub best_score: f32,
     pub best_is_impulse: bool,
+    /// Over a fired impulse's tail that the onset did not rise out of: the share of
+    /// its sound that the pattern's takes explain over the tail (0 otherwise).
+    pub explained_over_tail: f32,
     pub threshold: f32,
     /// The nearest background sound's score (minus infinity without a background).
     pub background_score: f32,
@@ -110,12 +122,23 @@ pub struct Evidence {
 
 impl Evidence {
     /// The sound did not rise out of what went before, and that was not a word that
-    /// fired with this one a clear instance of an impulse pattern.
+    /// fired with this one a clear instance of an impulse pattern, or what one adds to
+    /// that word's tail.
     pub fn continues_a_sound(&self, params: &GateParams) -> bool {
         self.rise_db < params.pre_quiet_db
             && !(self.over_fired_impulse
                 && self.best_is_impulse
                 && self.best_score >= params.over_fired_score)
+            && !self.new_over_tail(params)
+    }
+
+    /// An impulse pattern's take added to the tail of a word that fired explains the
+    /// sound that did not rise out of that tail.
+    pub fn new_over_tail(&self, params: &GateParams) -> bool {
+        self.rise_db < params.pre_quiet_db
+            && self.over_fired_impulse
+            && self.best_is_impulse
+            && self.explained_over_tail >= params.over_tail_share
     }
 
     /// No pattern scored its threshold.
@@ -131,15 +154,18 @@ impl Evidence {
 
 /// The first gate, in order, that stops the onset; `Fired` when none does.
 pub fn decide(e: &Evidence, params: &GateParams) -> Outcome {
+    // The threshold and the background judge the onset's features, which over a
+    // word's tail are mostly the tail's.
+    let over_tail = e.new_over_tail(params);
     if e.continues_a_sound(params) {
         Outcome::QuietBefore
     } else if e.follows_unrecognised_sound {
         Outcome::SpeechGuard
     } else if e.continues_last_impulse {
         Outcome::Continuation
-    } else if e.below_threshold() {
+    } else if e.below_threshold() && !over_tail {
         Outcome::BelowThreshold
-    } else if e.like_speech(params) {
+    } else if e.like_speech(params) && !over_tail {
         Outcome::Background
     } else if e.held_by_best_pattern {
         Outcome::HeldContinues
@@ -163,6 +189,7 @@ mod tests {
             continues_last_impulse: false,
             best_score: 0.8,
             best_is_impulse: true,
+            explained_over_tail: 0.0,
             threshold: 0.3,
             background_score: 0.5,
             held_by_best_pattern: false,
@@ -236,7 +263,7 @@ mod tests {
     }
 
     #[test]
-    fn over_the_tail_of_a_sound_that_fired_only_a_clear_impulse_is_excused_the_rise() {
+    fn over_the_tail_of_a_sound_that_fired_a_clear_impulse_is_excused_the_rise() {
         let p = GateParams::default();
         let over_a_word = Evidence {
             rise_db: 3.0,
@@ -279,6 +306,64 @@ mod tests {
     }
 
     #[test]
+    fn over_the_tail_of_a_sound_that_fired_what_a_take_adds_to_it_excuses_the_rise() {
+        let p = GateParams::default();
+        // Features that no pattern passes and that the background takes for speech:
+        // over a tail they are the tail's.
+        let over_a_tail = Evidence {
+            rise_db: 3.0,
+            over_fired_impulse: true,
+            best_score: 0.2,
+            background_score: 0.9,
+            explained_over_tail: 0.9,
+            ..clear()
+        };
+        assert_eq!(decide(&over_a_tail, &p), Outcome::Fired);
+        for (e, why) in [
+            (
+                Evidence {
+                    explained_over_tail: 0.84,
+                    ..over_a_tail
+                },
+                "the take explains too little",
+            ),
+            (
+                Evidence {
+                    over_fired_impulse: false,
+                    ..over_a_tail
+                },
+                "over unrecognised sound",
+            ),
+            (
+                Evidence {
+                    best_is_impulse: false,
+                    ..over_a_tail
+                },
+                "a held pattern",
+            ),
+        ] {
+            assert_eq!(decide(&e, &p), Outcome::QuietBefore, "{why}: {e:?}");
+        }
+        // A sound that rose out of the tail is judged by its features.
+        let rose = Evidence {
+            rise_db: 12.0,
+            ..over_a_tail
+        };
+        assert_eq!(decide(&rose, &p), Outcome::BelowThreshold);
+        // The gates that do not judge features still do.
+        let own_later_sound = Evidence {
+            continues_last_impulse: true,
+            ..over_a_tail
+        };
+        assert_eq!(decide(&own_later_sound, &p), Outcome::Continuation);
+        let guarded = Evidence {
+            follows_unrecognised_sound: true,
+            ..over_a_tail
+        };
+        assert_eq!(decide(&guarded, &p), Outcome::SpeechGuard);
+    }
+
+    #[test]
     fn the_first_gate_in_order_names_the_outcome() {
         let p = GateParams::default();
         let everything = Evidence {
@@ -310,6 +395,7 @@ mod tests {
         let strict = GateParams {
             pre_quiet_db: 20.0,
             over_fired_score: 0.95,
+            over_tail_share: 0.85,
             background_margin: 0.5,
             min_strength: 0.0,
         };

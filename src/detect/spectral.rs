@@ -10,8 +10,10 @@
 //! gates ([`super::gates`]) then decide what becomes of it from the evidence gathered
 //! here: it must stand 10 dB out of the 40-5 ms before it (a consonant inside speech
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
-//! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), and
-//! so on. The levels they compare are the sound in a frame as the bands hear it (the
+//! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), or
+//! one of its takes added to that word's tail explains its first two decision windows
+//! (`GateParams::over_tail_share`; it is then named by that take, and its features,
+//! mostly the tail's, are not judged), and so on. The levels they compare are the sound in a frame as the bands hear it (the
 //! rumble under them cut, [`LowCut`]), its power less twice the room's noise (the
 //! level stage, [`super::levels`]), so that noise just under a sound neither hides it
 //! nor passes for speech around it; for the rise out of the quiet before, the noise of
@@ -67,7 +69,9 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::background::BackgroundModel;
-use super::classify::{default_noise_over_floor, Room, TrackParams, Tracked};
+use super::classify::{
+    default_noise_over_floor, share_explained_over_tail, Room, TrackParams, Tracked,
+};
 use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
 use super::enrol::{
@@ -326,6 +330,14 @@ pub struct SpectralMatcher {
     instance: Vec<f32>,
     /// The pooled power spectrum `instance` was made from.
     instance_power: Vec<f32>,
+    /// Per template, for an onset over a fired word's tail that did not rise out of it:
+    /// the share of its sound that the take explains over the tail
+    /// ([`share_explained_over_tail`]; over its first decision window, then the least
+    /// of its first two; 0 for a held pattern's, and for any other onset).
+    over_tail_shares: Vec<f32>,
+    /// Whether an onset over a tail may wait for a second window
+    /// (`max_decision_seconds` allows it); without, the share is not asked.
+    over_tail_waits: bool,
     /// The onset's room, and a take's features as heard in it.
     room: Room,
     heard_take: Vec<f32>,
@@ -426,13 +438,19 @@ pub struct OnsetRecord {
     /// recognised word's tail, and an impulse pattern scoring `over_fired_score` there
     /// is not held to the rise.
     pub over_fired_impulse: bool,
+    /// Over such a tail, when it did not rise out of it: the share of its sound that
+    /// its pattern's takes, added to the tail, explain beyond the tail alone (an
+    /// impulse explaining `over_tail_share` is excused the rise and named by it).
+    #[serde(serialize_with = "super::opt_ratio")]
+    pub explained_over_tail: Option<f64>,
     /// The speech guard stopped it on sounds it had stopped before near speech: the
     /// talk they belong to (their sound alone closed it; a sound stopped so covers its
     /// span again).
     pub guard_by_stopped_speech: bool,
     /// The sound the choice of its pattern was made on, seconds from the onset: one
     /// decision window, or more when its two best patterns are alike over one
-    /// ([`Separating`]).
+    /// ([`Separating`]) or when it was judged over a fired word's tail by what a take
+    /// adds to it (`OVER_TAIL_WINDOWS`).
     #[serde(serialize_with = "super::opt_seconds")]
     pub window_seconds: Option<f64>,
     pub outcome: Outcome,
@@ -452,6 +470,7 @@ impl OnsetRecord {
             background_score: None,
             rise_db: None,
             over_fired_impulse: false,
+            explained_over_tail: None,
             guard_by_stopped_speech: false,
             window_seconds: None,
             outcome,
@@ -494,6 +513,13 @@ const CONTINUATION_DB: f64 = 6.0;
 /// score alike, 0.8 and 0.9 lose the beats' "B" and "Pf", 0.5 and less wait for pairs
 /// that longer windows do not part.
 const ALIKE_SIMILARITY: f32 = 0.7;
+
+/// Decision windows an onset over a fired word's tail is judged over by what a take adds
+/// to the tail ([`share_explained_over_tail`]): the consonant a word begins with and
+/// the sound it goes on into. Over its first alone, a word's own closing consonant
+/// said quicker than its take (the closing "p" of a "pop" at 300 words a minute) is
+/// explained as well, and fired as a new word.
+const OVER_TAIL_WINDOWS: usize = 2;
 
 impl SpectralMatcher {
     /// A matcher of `patterns` for input recorded at `input_rate` (resampled to
@@ -650,6 +676,8 @@ impl SpectralMatcher {
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
             instance_power: vec![0.0; BANDS],
+            over_tail_shares: vec![0.0; templates_len],
+            over_tail_waits: allowed_windows >= OVER_TAIL_WINDOWS,
             room: Room::new(noise_over_floor),
             heard_take: vec![0.0; FEATURES],
             pitch: PitchEstimator::new(rate),
@@ -700,6 +728,9 @@ impl SpectralMatcher {
             );
             let most = matcher.separating.iter().copied().max().unwrap_or(1);
             matcher.max_windows = matcher.max_windows.max(usize::from(most));
+        }
+        if matcher.over_tail_waits {
+            matcher.max_windows = matcher.max_windows.max(OVER_TAIL_WINDOWS);
         }
         matcher.compare_bands(bands);
         matcher
@@ -1019,6 +1050,31 @@ impl SpectralMatcher {
             rise_peak,
             guard,
         } = first_look;
+        // Over a fired word's tail, the onset's features are mostly the tail's: it is
+        // named by what its takes add to the tail instead, where one explains enough
+        // (a clear instance of its best pattern is excused as it is).
+        let over_tail = self.over_tail_waits
+            && context.over_fired_impulse
+            && context.rise_db < self.gates.pre_quiet_db;
+        let judged_over_tail = over_tail && !self.clear_instance(pi);
+        // Decision windows the choice of its pattern heard.
+        let mut heard_windows = 1;
+        if !judged_over_tail {
+            self.over_tail_shares.fill(0.0);
+        } else if self.best_over_tail().is_some() {
+            // A word's own closing consonant, said quicker than its take, is a burst
+            // over the tail too; a new word goes on into its own sound. Both windows
+            // must be explained.
+            if windows < OVER_TAIL_WINDOWS {
+                self.waiting = Some(first_look);
+                return Some(OVER_TAIL_WINDOWS);
+            }
+            self.hear_over_tail(time_sample, onset_frame, OVER_TAIL_WINDOWS);
+            heard_windows = OVER_TAIL_WINDOWS;
+            if let Some(over_tail) = self.best_over_tail() {
+                pi = over_tail;
+            }
+        }
         let mut evidence = self.as_instance_of(pi, &context, early);
         let mut outcome = decide(&evidence, &self.gates);
         // An onset that fires, whose runner-up is a pattern one window cannot tell from
@@ -1070,9 +1126,11 @@ impl SpectralMatcher {
                     .is_finite()
                     .then_some(f64::from(evidence.rise_db)),
                 over_fired_impulse: evidence.over_fired_impulse,
+                explained_over_tail: judged_over_tail
+                    .then_some(f64::from(evidence.explained_over_tail)),
                 guard_by_stopped_speech: outcome == Outcome::SpeechGuard
                     && guard == Guard::ClosedByStopped,
-                window_seconds: Some(self.heard_seconds(parted_over)),
+                window_seconds: Some(self.heard_seconds(parted_over.max(heard_windows))),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
@@ -1252,14 +1310,20 @@ impl SpectralMatcher {
         // window, next to the pooling of every shift that scoring did.
         let early = self.decision_window_energy(time_sample);
         let guard = self.guard(time_sample, peak);
+        let over_fired_impulse = self.over_fired_impulse(time_sample);
+        self.over_tail_shares.fill(0.0);
+        if self.over_tail_waits && over_fired_impulse && rise_db < self.gates.pre_quiet_db {
+            self.hear_over_tail(time_sample, onset_frame, 1);
+        }
         let context = Evidence {
             rise_db,
-            over_fired_impulse: self.over_fired_impulse(time_sample),
+            over_fired_impulse,
             follows_unrecognised_sound: guard != Guard::Open,
             continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
             best_is_impulse: false,
+            explained_over_tail: 0.0,
             threshold: 0.0,
             held_by_best_pattern: false,
             strength: 0.0,
@@ -1273,6 +1337,83 @@ impl SpectralMatcher {
         })
     }
 
+    /// Sets `over_tail_shares` for the onset at `time_sample` (frame `onset_frame`),
+    /// which lies over a fired word's tail: the share of its decision window
+    /// `window` (1 or 2) that each impulse take's window as far after its onset
+    /// explains over the mean power of the onset's quiet-before span, in the room's
+    /// noise (as `score_patterns` set it for this onset); over the second window, the
+    /// lesser of that and the first's.
+    fn hear_over_tail(&mut self, time_sample: u64, onset_frame: u64, window: usize) {
+        let k = self.decision_frames;
+        self.pool_frames(onset_frame + ((window - 1) * k) as u64, k);
+        let mut onset = [0.0f32; BANDS];
+        onset.copy_from_slice(&self.instance_power);
+        let cap = self.frame_capacity as u64;
+        let (from, to) = self.quiet_before_span(time_sample);
+        let (first, end) = self
+            .frames_inside(from, to)
+            .fold((u64::MAX, 0), |(a, b), f| (a.min(f), b.max(f + 1)));
+        let mut before = [0.0f32; BANDS];
+        let frames = &self.frames;
+        pool_power(
+            end.saturating_sub(first) as usize,
+            |f| {
+                let slot = ((first + f as u64) % cap) as usize;
+                &frames[slot * BANDS..(slot + 1) * BANDS]
+            },
+            &mut before,
+        );
+        let bands = self.analyzer.cepstrum.bands();
+        for (t, share) in self.templates.iter().zip(self.over_tail_shares.iter_mut()) {
+            if self.patterns[t.pattern].kind != PatternKind::Impulse {
+                continue;
+            }
+            // The take's window as far after its onset: its first, or the one its
+            // later sound starts `k` frames on (none when the take is shorter).
+            let take = match window {
+                1 => Some(&t.pooled_power[..]),
+                _ => t
+                    .later_power
+                    .get((window - 1) * k * BANDS - BANDS..(window - 1) * k * BANDS),
+            };
+            let explained = take.map_or(0.0, |take| {
+                share_explained_over_tail(&onset, &before, self.room.noise(), take, bands)
+            });
+            *share = if window == 1 {
+                explained
+            } else {
+                share.min(explained)
+            };
+        }
+    }
+
+    /// The share of the onset's sound over a fired word's tail that pattern `pi`'s
+    /// takes explain: its best take's.
+    fn over_tail_share(&self, pi: usize) -> f32 {
+        self.templates
+            .iter()
+            .zip(&self.over_tail_shares)
+            .filter(|(t, _)| t.pattern == pi)
+            .map(|(_, &s)| s)
+            .fold(0.0, f32::max)
+    }
+
+    /// The impulse pattern whose takes explain most of the onset's sound over a fired
+    /// word's tail, when that share reaches `GateParams::over_tail_share`.
+    fn best_over_tail(&self) -> Option<usize> {
+        let (pi, share) = (0..self.patterns.len())
+            .map(|pi| (pi, self.over_tail_share(pi)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        (share >= self.gates.over_tail_share).then_some(pi)
+    }
+
+    /// Pattern `pi`, an impulse, scored `GateParams::over_fired_score` on the onset:
+    /// a clear instance, excused the rise over a fired word's tail as it is.
+    fn clear_instance(&self, pi: usize) -> bool {
+        self.patterns[pi].kind == PatternKind::Impulse
+            && self.pattern_scores[pi].score >= self.gates.over_fired_score
+    }
+
     /// The evidence about the onset being classified as an instance of pattern `pi`:
     /// `context` with the pattern's own score, threshold, held sound and strength
     /// (`early`, the energy of the onset's decision window, against its best take's).
@@ -1281,6 +1422,7 @@ impl SpectralMatcher {
         Evidence {
             best_score: score,
             best_is_impulse: self.patterns[pi].kind == PatternKind::Impulse,
+            explained_over_tail: self.over_tail_share(pi),
             threshold: self.patterns[pi].threshold,
             held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
             strength: (early / self.templates[take].early_energy.max(1e-12)).sqrt(),
