@@ -7,7 +7,8 @@ within 50 ms). For every set whose decision latency p95 exceeds 30 ms it counts 
 matched impulses decided more than 30 ms after their annotated onset (`emitted_at` less
 the truth's onset), and splits them by why: a decision that waited more than 30 ms
 after the onset the detector placed (a pair of patterns alike at first, decided over as
-many windows as part them), and an onset placed 3 ms or more after its annotation (by
+many windows as part them; a word over a fired word's tail, judged over two; a word
+dated back to where its soft start began), and an onset placed 3 ms or more after its annotation (by
 label). Prints a Markdown table; then, for each set with onsets placed late, how far
 the first 10 ms after those annotated onsets stand over the 40-10 ms before them (the
 room) and under the loudest 5 ms of the sound (up to 100 ms on, or the next annotated
@@ -96,7 +97,7 @@ def main():
     summary = json.loads(summary_path.read_text())["sets"]
     score = scorer()
     print("| set | matched impulses | latency p95 (ms) | decided over 30 ms after the annotated onset"
-          " | of which a pair waited (over 30 ms after the placed onset)"
+          " | of which the decision waited (over 30 ms after the onset's time)"
           " | of which placed 3 ms or more after the annotated onset | those by label |")
     print("|---|---|---|---|---|---|---|")
     levels = []
