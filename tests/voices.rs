@@ -672,7 +672,7 @@ fn said_on_the_tune(name: &str, speed: &str, times: usize, seed: u64) -> (f64, S
     let mut rng = Rng::new(seed);
     let mut at = 0.5;
     let mut placements = Vec::new();
-    for b in std::iter::repeat(&beats).take(times).flatten() {
+    for b in std::iter::repeat_n(&beats, times).flatten() {
         let which = (rng.next_u64() % names.len() as u64) as usize;
         placements.push((which, at, 10f32.powf(rng.range(-6.0, 0.0) as f32 / 20.0)));
         at += b * beat_seconds;

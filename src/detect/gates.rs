@@ -69,8 +69,9 @@ pub struct GateParams {
     /// sweep and the scores behind it: `docs/quiet-before.md`.
     pub over_fired_score: f32,
     /// ...or one of its takes, added to that tail, explains at least this share of
-    /// the onset's sound that the tail alone leaves unexplained
-    /// (`share_explained_over_tail` in the classification stage). The onset's
+    /// the onset's sound that the tail alone leaves unexplained, over each of its first
+    /// two decision windows (`share_explained_over_tail` in the classification stage,
+    /// `OVER_TAIL_WINDOWS` in the matcher). The onset's
     /// features are then mostly the tail's: such an onset is named by that share, and
     /// neither the threshold nor the background, which judge those features, stops it.
     /// Swept in `docs/quiet-before.md` ("What a take adds to the tail").
@@ -109,7 +110,8 @@ pub struct Evidence {
     pub best_score: f32,
     pub best_is_impulse: bool,
     /// Over a fired impulse's tail that the onset did not rise out of: the share of
-    /// its sound that the pattern's takes explain over the tail (0 otherwise).
+    /// its sound that the pattern's best take explains over the tail (0 otherwise, and
+    /// for a clear instance, which its score excuses).
     pub explained_over_tail: f32,
     pub threshold: f32,
     /// The nearest background sound's score (minus infinity without a background).
