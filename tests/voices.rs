@@ -652,11 +652,17 @@ fn words_said_on_a_rhythm_at_150_bpm_are_each_found() {
     assert!(f1 >= 0.95, "F1 {f1:.3}: {account}");
 }
 
-/// The voice's "tick", "pop" and "boom" said at `speed` words a minute on the beats of a
-/// tune (1 a quarter note) at 150 bpm, `times` over, each at -6..0 dB (drawn from
-/// `seed`) in quiet noise: the F1 of what the detector finds, and its account with the
-/// explanation of every onset.
-fn said_on_the_tune(name: &str, speed: &str, times: usize, seed: u64) -> (f64, String) {
+/// The voice's "tick", "pop" and "boom" (enrolled, and said at `speed` words a minute
+/// on the beats of a tune, 1 a quarter note, at 150 bpm, `times` over, each at -6..0 dB
+/// drawn from `seed`, in quiet noise): the patterns, the recording and its truth.
+struct Tune {
+    settings: DetectorSettings,
+    patterns: Vec<Pattern>,
+    rec: Vec<f32>,
+    truth: Vec<(&'static str, f64)>,
+}
+
+fn tune(name: &str, speed: &str, times: usize, seed: u64) -> Tune {
     let dir = temp_dir(name);
     let settings = spectral();
     let patterns = without(impulses(enrolled_words(&dir, &settings)), "pew");
@@ -684,11 +690,59 @@ fn said_on_the_tune(name: &str, speed: &str, times: usize, seed: u64) -> (f64, S
         truth.push((names[which], at));
     }
     add_noise(&mut rec, 0.0005, seed + 1);
-    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    Tune {
+        settings,
+        patterns,
+        rec,
+        truth,
+    }
+}
+
+/// The F1 of what the detector finds in [`tune`]'s recording, and its account with the
+/// explanation of every onset.
+fn said_on_the_tune(name: &str, speed: &str, times: usize, seed: u64) -> (f64, String) {
+    let t = tune(name, speed, times, seed);
+    let mut det = Detector::new(t.patterns, &t.settings, RATE).unwrap();
     det.enable_explain();
-    let events = detect_in_blocks(&mut det, &rec, 256);
-    let (f1, account) = f1_against(&events, &truth);
+    let events = detect_in_blocks(&mut det, &t.rec, 256);
+    let (f1, account) = f1_against(&events, &t.truth);
     (f1, format!("{account}\n{}", explained(&mut det)))
+}
+
+/// A word judged over a fired word's tail waits for a second decision window: the
+/// words of the tune at their own speed give the same events in blocks of any size,
+/// some fired so, and every decision within the detector's decision delay bound.
+#[test]
+fn words_judged_over_a_tail_ignore_block_size_and_stay_within_the_bound() {
+    let t = tune("rhythm-blocks", "160", 3, 45);
+    let run = |block: usize| {
+        let mut det = Detector::new(t.patterns.clone(), &t.settings, RATE).unwrap();
+        det.enable_explain();
+        let events = detect_in_blocks(&mut det, &t.rec, block);
+        let records = det.take_explain().unwrap_or_default();
+        (events, records, det.decision_delay_bound())
+    };
+    let (events, records, bound) = run(256);
+    // Onsets over a tail that waited for their second window, and those that fired.
+    let waited: Vec<_> = records
+        .iter()
+        .filter(|r| r.explained_over_tail.is_some() && r.window_seconds.is_some_and(|w| w > 0.03))
+        .collect();
+    let fired = waited
+        .iter()
+        .filter(|r| r.outcome == onomato::detect::gates::Outcome::Fired)
+        .count();
+    assert!(
+        waited.len() >= 3 && fired >= 1,
+        "{} waited, {fired} fired",
+        waited.len()
+    );
+    for e in &events {
+        assert!(e.emitted_at - e.time <= bound, "{e:?}, bound {bound}");
+    }
+    for block in [1, 7, 4096] {
+        assert_eq!(run(block).0, events, "blocks of {block}");
+    }
 }
 
 /// Issue: in the paper's rhythm the words overlap: each begins while the one before
