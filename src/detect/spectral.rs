@@ -521,6 +521,20 @@ const ALIKE_SIMILARITY: f32 = 0.7;
 /// explained as well, and fired as a new word.
 const OVER_TAIL_WINDOWS: usize = 2;
 
+/// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
+/// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
+fn pool_ring(frames: &[f32], capacity: usize, first: u64, count: usize, out: &mut [f32]) {
+    let cap = capacity as u64;
+    pool_power(
+        count,
+        |k| {
+            let slot = ((first + k as u64) % cap) as usize;
+            &frames[slot * BANDS..(slot + 1) * BANDS]
+        },
+        out,
+    );
+}
+
 impl SpectralMatcher {
     /// A matcher of `patterns` for input recorded at `input_rate` (resampled to
     /// `settings.sample_rate` before it arrives).
@@ -1051,17 +1065,12 @@ impl SpectralMatcher {
             guard,
         } = first_look;
         // Over a fired word's tail, the onset's features are mostly the tail's: it is
-        // named by what its takes add to the tail instead, where one explains enough
-        // (a clear instance of its best pattern is excused as it is).
-        let over_tail = self.over_tail_waits
-            && context.over_fired_impulse
-            && context.rise_db < self.gates.pre_quiet_db;
-        let judged_over_tail = over_tail && !self.clear_instance(pi);
+        // named by what its takes add to the tail instead, where one explains enough.
+        let judged_over_tail =
+            self.judged_over_tail(context.over_fired_impulse, context.rise_db, pi);
         // Decision windows the choice of its pattern heard.
         let mut heard_windows = 1;
-        if !judged_over_tail {
-            self.over_tail_shares.fill(0.0);
-        } else if self.best_over_tail().is_some() {
+        if judged_over_tail && self.best_over_tail().is_some() {
             // A word's own closing consonant, said quicker than its take, is a burst
             // over the tail too; a new word goes on into its own sound. Both windows
             // must be explained.
@@ -1312,7 +1321,7 @@ impl SpectralMatcher {
         let guard = self.guard(time_sample, peak);
         let over_fired_impulse = self.over_fired_impulse(time_sample);
         self.over_tail_shares.fill(0.0);
-        if self.over_tail_waits && over_fired_impulse && rise_db < self.gates.pre_quiet_db {
+        if self.judged_over_tail(over_fired_impulse, rise_db, best) {
             self.hear_over_tail(time_sample, onset_frame, 1);
         }
         let context = Evidence {
@@ -1348,19 +1357,16 @@ impl SpectralMatcher {
         self.pool_frames(onset_frame + ((window - 1) * k) as u64, k);
         let mut onset = [0.0f32; BANDS];
         onset.copy_from_slice(&self.instance_power);
-        let cap = self.frame_capacity as u64;
         let (from, to) = self.quiet_before_span(time_sample);
         let (first, end) = self
             .frames_inside(from, to)
             .fold((u64::MAX, 0), |(a, b), f| (a.min(f), b.max(f + 1)));
         let mut before = [0.0f32; BANDS];
-        let frames = &self.frames;
-        pool_power(
+        pool_ring(
+            &self.frames,
+            self.frame_capacity,
+            first,
             end.saturating_sub(first) as usize,
-            |f| {
-                let slot = ((first + f as u64) % cap) as usize;
-                &frames[slot * BANDS..(slot + 1) * BANDS]
-            },
             &mut before,
         );
         let bands = self.analyzer.cepstrum.bands();
@@ -1407,11 +1413,18 @@ impl SpectralMatcher {
         (share >= self.gates.over_tail_share).then_some(pi)
     }
 
-    /// Pattern `pi`, an impulse, scored `GateParams::over_fired_score` on the onset:
-    /// a clear instance, excused the rise over a fired word's tail as it is.
-    fn clear_instance(&self, pi: usize) -> bool {
-        self.patterns[pi].kind == PatternKind::Impulse
-            && self.pattern_scores[pi].score >= self.gates.over_fired_score
+    /// Whether the onset, whose best pattern over its first window is `best`, is judged
+    /// by what a take adds to a fired word's tail (`over_tail_shares`): it lies over
+    /// one (`over_fired_impulse`), did not rise out of it (`rise_db`), and is no clear
+    /// instance of an impulse pattern (`GateParams::over_fired_score`), which is
+    /// excused the rise as it is.
+    fn judged_over_tail(&self, over_fired_impulse: bool, rise_db: f32, best: usize) -> bool {
+        let clear_instance = self.patterns[best].kind == PatternKind::Impulse
+            && self.pattern_scores[best].score >= self.gates.over_fired_score;
+        self.over_tail_waits
+            && over_fired_impulse
+            && rise_db < self.gates.pre_quiet_db
+            && !clear_instance
     }
 
     /// The evidence about the onset being classified as an instance of pattern `pi`:
@@ -1586,14 +1599,11 @@ impl SpectralMatcher {
     /// Pools `count` frames from frame `first` (still in the ring) into
     /// `self.instance_power` and `self.instance`.
     fn pool_frames(&mut self, first: u64, count: usize) {
-        let cap = self.frame_capacity as u64;
-        let frames = &self.frames;
-        pool_power(
+        pool_ring(
+            &self.frames,
+            self.frame_capacity,
+            first,
             count,
-            |k| {
-                let slot = ((first + k as u64) % cap) as usize;
-                &frames[slot * BANDS..(slot + 1) * BANDS]
-            },
             &mut self.instance_power,
         );
         features_of_power(
