@@ -798,15 +798,17 @@ fn a_word_said_over_the_tail_of_a_word_that_fired_is_found() {
 /// Issue: the paper's rhythm with the words said at their enrolled speed: each begins
 /// while the one before still sounds, so its first window is mostly the last word's
 /// tail. The voice's "tick", "pop" and "boom" at 160 words a minute on the tune above,
-/// three times over: at least 0.5 F1 (0.56 now, 0.41 when such a word was judged by how
-/// its first window matched alone). Not yet the issue's 0.95: words 0.2 s into a "boom"
-/// begin over its vowel at full level, and once one word is missed the next begin over
+/// three times over: at least 0.58 F1 (0.61 now; 0.56 when whether such a word was
+/// the last one's own later sound was judged by the similarity of its features, which
+/// are mostly that word's tail; 0.41 when such a word was judged by how its first
+/// window matched alone). Not yet the issue's 0.95: words 0.2 s into a "boom" begin
+/// over its vowel at full level, and once one word is missed the next begin over
 /// sound no pattern recognised (a "pop" whose take explains 0.84 of its two windows,
 /// under the 0.85 asked, takes the three "tick"s after it along).
 #[test]
 fn words_said_at_their_own_speed_on_a_rhythm_at_150_bpm_are_found() {
     let (f1, account) = said_on_the_tune("rhythm-overlap", "160", 3, 45);
-    assert!(f1 >= 0.5, "F1 {f1:.3}: {account}");
+    assert!(f1 >= 0.58, "F1 {f1:.3}: {account}");
 }
 
 /// Issue: a voice whose "p" lasts nearly as long as the wait (espeak-ng's at 130 words a

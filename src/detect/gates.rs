@@ -104,7 +104,8 @@ pub struct Evidence {
     pub over_fired_impulse: bool,
     /// The speech guard's span before the onset held enough unrecognised sound.
     pub follows_unrecognised_sound: bool,
-    /// It is the last fired impulse's own later sound.
+    /// It is the last fired impulse's own later sound (over that impulse's tail, when
+    /// named by what a take adds to it: by what the impulse's take adds as much later).
     pub continues_last_impulse: bool,
     /// The best pattern's score, whether it is an impulse, and its threshold.
     pub best_score: f32,

@@ -12,8 +12,9 @@
 //! follows a vowel) unless that sound is an impulse that fired and it is clearly an
 //! impulse pattern's (a rhythm's words overlap; `GateParams::over_fired_score`), or
 //! one of its takes added to that word's tail explains its first two decision windows
-//! (`GateParams::over_tail_share`; it is then named by that take, and its features,
-//! mostly the tail's, are not judged), and so on. The levels they compare are the sound in a frame as the bands hear it (the
+//! (`GateParams::over_tail_share`; it is then named by that take, its features,
+//! mostly the tail's, are not judged, and it is that word's own later sound only where
+//! the fired take's later windows explain it as well), and so on. The levels they compare are the sound in a frame as the bands hear it (the
 //! rumble under them cut, [`LowCut`]), its power less twice the room's noise (the
 //! level stage, [`super::levels`]), so that noise just under a sound neither hides it
 //! nor passes for speech around it; for the rise out of the quiet before, the noise of
@@ -1059,7 +1060,7 @@ impl SpectralMatcher {
         };
         let FirstLook {
             best: mut pi,
-            context,
+            mut context,
             early,
             rise_peak,
             guard,
@@ -1082,6 +1083,9 @@ impl SpectralMatcher {
             heard_windows = OVER_TAIL_WINDOWS;
             if let Some(over_tail) = self.best_over_tail() {
                 pi = over_tail;
+                let share = self.over_tail_share(pi);
+                context.continues_last_impulse =
+                    self.continues_over_tail(time_sample, onset_frame, share);
             }
         }
         let mut evidence = self.as_instance_of(pi, &context, early);
@@ -1354,21 +1358,8 @@ impl SpectralMatcher {
     /// lesser of that and the first's.
     fn hear_over_tail(&mut self, time_sample: u64, onset_frame: u64, window: usize) {
         let k = self.decision_frames;
-        self.pool_frames(onset_frame + ((window - 1) * k) as u64, k);
-        let mut onset = [0.0f32; BANDS];
-        onset.copy_from_slice(&self.instance_power);
-        let (from, to) = self.quiet_before_span(time_sample);
-        let (first, end) = self
-            .frames_inside(from, to)
-            .fold((u64::MAX, 0), |(a, b), f| (a.min(f), b.max(f + 1)));
-        let mut before = [0.0f32; BANDS];
-        pool_ring(
-            &self.frames,
-            self.frame_capacity,
-            first,
-            end.saturating_sub(first) as usize,
-            &mut before,
-        );
+        let onset = self.window_power(onset_frame, window);
+        let before = self.tail_before(time_sample);
         let bands = self.analyzer.cepstrum.bands();
         for (t, share) in self.templates.iter().zip(self.over_tail_shares.iter_mut()) {
             if self.patterns[t.pattern].kind != PatternKind::Impulse {
@@ -1391,6 +1382,70 @@ impl SpectralMatcher {
                 share.min(explained)
             };
         }
+    }
+
+    /// The pooled power spectrum of decision window `window` (1, 2, ...) of the onset at
+    /// frame `onset_frame`.
+    fn window_power(&mut self, onset_frame: u64, window: usize) -> [f32; BANDS] {
+        let k = self.decision_frames;
+        self.pool_frames(onset_frame + ((window - 1) * k) as u64, k);
+        let mut power = [0.0f32; BANDS];
+        power.copy_from_slice(&self.instance_power);
+        power
+    }
+
+    /// The mean power spectrum of the quiet-before span of the onset at `time_sample`:
+    /// the tail it began over.
+    fn tail_before(&self, time_sample: u64) -> [f32; BANDS] {
+        let (from, to) = self.quiet_before_span(time_sample);
+        let (first, end) = self
+            .frames_inside(from, to)
+            .fold((u64::MAX, 0), |(a, b), f| (a.min(f), b.max(f + 1)));
+        let mut before = [0.0f32; BANDS];
+        pool_ring(
+            &self.frames,
+            self.frame_capacity,
+            first,
+            end.saturating_sub(first) as usize,
+            &mut before,
+        );
+        before
+    }
+
+    /// Whether the onset at `time_sample` (frame `onset_frame`), named over a fired
+    /// word's tail by a take explaining `new_share` of it, is that word's own later
+    /// sound instead: the fired take's own windows as many frames after its onset
+    /// (give or take `CONTINUATION_SLACK_SECONDS`), added to the tail, explain at least
+    /// as much of each of the onset's `OVER_TAIL_WINDOWS` windows. Asked in the terms
+    /// the new word was, because the similarity [`Self::continues_last_impulse`] asks
+    /// hears the tail in the onset's features, which the fired word's later sound
+    /// always resembles.
+    fn continues_over_tail(&mut self, time_sample: u64, onset_frame: u64, new_share: f32) -> bool {
+        let Some(last) = self.last_impulse else {
+            return false;
+        };
+        let after = onset_frame.saturating_sub(last.onset_frame) as usize;
+        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
+        let count = self.templates[last.template].later_energy.len();
+        if after == 0 || after > count + slack {
+            return false;
+        }
+        let windows: [[f32; BANDS]; OVER_TAIL_WINDOWS] =
+            std::array::from_fn(|w| self.window_power(onset_frame, w + 1));
+        let before = self.tail_before(time_sample);
+        let (k, bands) = (self.decision_frames, self.analyzer.cepstrum.bands());
+        let take = &self.templates[last.template];
+        (after.saturating_sub(slack).max(1)..=(after + slack).min(count)).any(|lag| {
+            windows.iter().enumerate().all(|(w, onset)| {
+                let at = lag + w * k;
+                take.later_power
+                    .get((at - 1) * BANDS..at * BANDS)
+                    .is_some_and(|later| {
+                        share_explained_over_tail(onset, &before, self.room.noise(), later, bands)
+                            >= new_share
+                    })
+            })
+        })
     }
 
     /// The share of the onset's sound over a fired word's tail that pattern `pi`'s
