@@ -65,6 +65,7 @@
 //! Runs on the detector thread. FFT plan, mel bank, rings and templates are made in
 //! [`SpectralMatcher::new`]; `push` allocates nothing.
 
+use std::ops::RangeInclusive;
 use std::sync::Arc;
 
 use serde::Serialize;
@@ -1421,21 +1422,15 @@ impl SpectralMatcher {
     /// hears the tail in the onset's features, which the fired word's later sound
     /// always resembles.
     fn continues_over_tail(&mut self, time_sample: u64, onset_frame: u64, new_share: f32) -> bool {
-        let Some(last) = self.last_impulse else {
+        let Some((last, lags)) = self.continuation_lags(onset_frame) else {
             return false;
         };
-        let after = onset_frame.saturating_sub(last.onset_frame) as usize;
-        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
-        let count = self.templates[last.template].later_energy.len();
-        if after == 0 || after > count + slack {
-            return false;
-        }
         let windows: [[f32; BANDS]; OVER_TAIL_WINDOWS] =
             std::array::from_fn(|w| self.window_power(onset_frame, w + 1));
         let before = self.tail_before(time_sample);
         let (k, bands) = (self.decision_frames, self.analyzer.cepstrum.bands());
         let take = &self.templates[last.template];
-        (after.saturating_sub(slack).max(1)..=(after + slack).min(count)).any(|lag| {
+        lags.into_iter().any(|lag| {
             windows.iter().enumerate().all(|(w, onset)| {
                 let at = lag + w * k;
                 take.later_power
@@ -1668,28 +1663,39 @@ impl SpectralMatcher {
         );
     }
 
+    /// The last fired impulse and the frames after its take's onset (each a window of
+    /// its `later_power`) that the onset at frame `onset_frame` may be the later sound
+    /// of: as many as lie between the two, give or take `CONTINUATION_SLACK_SECONDS`.
+    /// None without such an impulse, or when the onset lies past its take's end.
+    fn continuation_lags(&self, onset_frame: u64) -> Option<(FiredImpulse, RangeInclusive<usize>)> {
+        let last = self.last_impulse?;
+        let after = onset_frame.saturating_sub(last.onset_frame) as usize;
+        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
+        let count = self.templates[last.template].later_energy.len();
+        (after != 0 && after <= count + slack).then(|| {
+            (
+                last,
+                after.saturating_sub(slack).max(1)..=(after + slack).min(count),
+            )
+        })
+    }
+
     /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
     /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
     /// onset (give or take `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room,
     /// sounds alike (similarity at least `CONTINUATION_SIMILARITY`) at the level the
     /// impulse's strength predicts (within `CONTINUATION_DB`).
     fn continues_last_impulse(&mut self, time_sample: u64, onset_frame: u64) -> bool {
-        let Some(last) = self.last_impulse else {
+        let Some((last, lags)) = self.continuation_lags(onset_frame) else {
             return false;
         };
-        let after = onset_frame.saturating_sub(last.onset_frame) as usize;
-        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
-        let count = self.templates[last.template].later_energy.len();
-        if after == 0 || after > count + slack {
-            return false;
-        }
         self.pool_instance(onset_frame);
         self.room.set(self.onsets.band_floors());
         self.room
             .hear(&self.instance_power, self.analyzer.cepstrum.bands());
         let template = &self.templates[last.template];
         let energy = self.decision_window_energy(time_sample);
-        for k in after.saturating_sub(slack).max(1)..=(after + slack).min(count) {
+        for k in lags {
             self.room.take(
                 &template.later_power[(k - 1) * BANDS..k * BANDS],
                 None,
