@@ -174,10 +174,15 @@ fn held_fricatives_and_vowels_of_a_voice_are_found_with_their_span() {
 
 /// A voice's words as patterns: espeak-ng says `text` and sox trims the silence around it.
 fn word(dir: &Path, name: &str, text: &str, speed: &str) -> Vec<f32> {
+    word_by(dir, name, text, "en", speed)
+}
+
+/// As [`word`], said by espeak-ng's `voice`.
+fn word_by(dir: &Path, name: &str, text: &str, voice: &str, speed: &str) -> Vec<f32> {
     let raw = dir.join(format!("{name}-raw.wav"));
     let trimmed = dir.join(format!("{name}.wav"));
     let (raw, trimmed) = (raw.to_str().unwrap(), trimmed.to_str().unwrap());
-    run("espeak-ng", &["-v", "en", "-s", speed, "-w", raw, text]);
+    run("espeak-ng", &["-v", voice, "-s", speed, "-w", raw, text]);
     #[rustfmt::skip]
     run("sox", &[raw, trimmed, "silence", "1", "0.005", "1%", "reverse", "silence", "1", "0.005", "1%", "reverse"]);
     read(Path::new(trimmed))
@@ -641,6 +646,45 @@ fn exact_copies_whose_soft_start_the_noise_hides_are_found() {
         rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
     }
     every_copy_is_found(&patterns, &settings, rec, &truth, 8);
+}
+
+/// Issue: exact copies are found once each. Three voices' words, as the exact-copy
+/// protocol cuts them (from where the waveform first reaches 5 % of its peak), copied
+/// at -12..0 dB in noise 50 dB down. A copy of "shot" ends on its "t", 0.28 s after its
+/// onset and out of the silence of its closure: that "t" scored 0.59 as a "tick" and
+/// fired, as the take's own later window there, though it resembled the sound better
+/// than any pattern's take did, resembled it under the 0.8 the continuation asked.
+#[test]
+fn an_exact_copy_whose_later_sound_rises_out_of_its_soft_start_fires_once() {
+    let dir = temp_dir("copies-once");
+    let settings = spectral();
+    let words = [
+        ("fish", "en-us-nyc+david"),
+        ("shot", "en-gb-x-gbcwmd+steph"),
+        ("tick", "en+Antonio"),
+    ];
+    let patterns: Vec<Pattern> = words
+        .iter()
+        .map(|(name, voice)| {
+            let said = word_by(&dir, name, name, voice, "175");
+            let peak = said.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+            let first = said.iter().position(|v| v.abs() > 0.05 * peak).unwrap();
+            let last = said.iter().rposition(|v| v.abs() > 0.05 * peak).unwrap();
+            let take = said[first..=last].to_vec();
+            Pattern::from_samples(name, PatternKind::Impulse, vec![take], &settings).unwrap()
+        })
+        .collect();
+    let mut rng = Rng::new(11);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for copy in 0..36 {
+        let p = &patterns[copy % patterns.len()];
+        let gain = 10f32.powf(rng.range(-12.0, 0.0) as f32 / 20.0);
+        truth.push((&*p.name, rec.len() as f64 / f64::from(RATE)));
+        rec.extend(p.takes[0].samples.iter().map(|v| v * gain));
+        rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
+    }
+    every_copy_is_found(&patterns, &settings, rec, &truth, 12);
 }
 
 /// Issue: the paper's own use, words said on a melody's rhythm (its rain scene). The

@@ -1333,7 +1333,11 @@ impl SpectralMatcher {
             rise_db,
             over_fired_impulse,
             follows_unrecognised_sound: guard != Guard::Open,
-            continues_last_impulse: self.continues_last_impulse(time_sample, onset_frame),
+            continues_last_impulse: self.continues_last_impulse(
+                time_sample,
+                onset_frame,
+                self.pattern_scores[best].score,
+            ),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
             best_is_impulse: false,
@@ -1680,12 +1684,23 @@ impl SpectralMatcher {
         })
     }
 
-    /// Whether the onset at `time_sample` (frame `onset_frame`) is the last impulse's
-    /// own later sound (the closing "p" of a "pop"): its take, as many frames after its
-    /// onset (give or take `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room,
-    /// sounds alike (similarity at least `CONTINUATION_SIMILARITY`) at the level the
-    /// impulse's strength predicts (within `CONTINUATION_DB`).
-    fn continues_last_impulse(&mut self, time_sample: u64, onset_frame: u64) -> bool {
+    /// Whether the onset at `time_sample` (frame `onset_frame`), whose best pattern
+    /// scored `best_score`, is the last impulse's own later sound (the closing "p" of a
+    /// "pop"): its take, as many frames after its onset (give or take
+    /// `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room, sounds alike at the
+    /// level the impulse's strength predicts (within `CONTINUATION_DB`). Alike: a
+    /// similarity of `CONTINUATION_SIMILARITY`, or at least the best pattern's score,
+    /// so that the onset is no likelier a new sound than the last one going on. The
+    /// second is what tells a take whose own first window scores low (a soft "f" that
+    /// the room's noise half hides) from its louder later sound: an exact copy of a
+    /// "fish" fired at 0.82, and the "sh" 28 ms on, 11 dB over the "f", fired again at
+    /// 0.59 where the take's later window scored 0.79.
+    fn continues_last_impulse(
+        &mut self,
+        time_sample: u64,
+        onset_frame: u64,
+        best_score: f32,
+    ) -> bool {
         let Some((last, lags)) = self.continuation_lags(onset_frame) else {
             return false;
         };
@@ -1705,7 +1720,8 @@ impl SpectralMatcher {
             let similarity = similarity(&self.heard_take, &self.instance);
             let expected = template.later_energy[k - 1] * last.strength * last.strength;
             let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
-            if similarity >= CONTINUATION_SIMILARITY && db.abs() <= CONTINUATION_DB {
+            let alike = similarity >= CONTINUATION_SIMILARITY.min(best_score);
+            if alike && db.abs() <= CONTINUATION_DB {
                 return true;
             }
         }
