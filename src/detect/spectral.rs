@@ -14,7 +14,8 @@
 //! one of its takes added to that word's tail explains its first two decision windows
 //! (`GateParams::over_tail_share`; it is then named by that take, its features,
 //! mostly the tail's, are not judged, and it is that word's own later sound only where
-//! the fired take's later windows explain it as well), and so on. The levels they compare are the sound in a frame as the bands hear it (the
+//! the fired take's later windows explain it as well), and so on. The levels they
+//! compare are the sound in a frame as the bands hear it (the
 //! rumble under them cut, [`LowCut`]), its power less twice the room's noise (the
 //! level stage, [`super::levels`]), so that noise just under a sound neither hides it
 //! nor passes for speech around it; for the rise out of the quiet before, the noise of
@@ -45,7 +46,8 @@
 //! sound whose strength (its amplitude against the take's over the decision window) is
 //! below `min_strength` is not the user's (a voice across the room, a breath) and does not
 //! fire either. Nor does an onset inside the last impulse's take that the take itself
-//! has at that time, at that level (the closing "p" of a "pop"): see
+//! has at that time, at that level, and that resembles it as well as its best pattern
+//! does or nearly as well as a take resembles itself (the closing "p" of a "pop"): see
 //! `SpectralMatcher::continues_last_impulse`.
 //!
 //! Exact copies: an onset that did not fire (but by the speech guard) is checked once
