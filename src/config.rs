@@ -361,7 +361,8 @@ pub struct DetectorSettings {
     pub decision_seconds: f64,
     /// Spectral method: the longest a decision waits, seconds from the onset, to tell
     /// apart two patterns that sound alike over `decision_seconds` (a spoken "pop" and
-    /// "pew" share their "p") and part later. `decision_seconds` never waits.
+    /// "pew" share their "p") and part later, or that an instance lies between over
+    /// `decision_seconds`. `decision_seconds` never waits.
     pub max_decision_seconds: f64,
     /// Spectral method: an onset is ignored when, this long before it, a sound that no
     /// pattern recognised (speech, music) held 200 ms within 10 dB of the new sound's
