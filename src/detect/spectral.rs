@@ -41,7 +41,9 @@
 //! nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
 //! windows, up to `max_decision_seconds` (`Separating` in [`super::enrol`],
-//! `SpectralMatcher::scores_over`); every gate still judges the first window.
+//! `SpectralMatcher::scores_over`), and so, over two, is an instance that its first
+//! window leaves between two impulse patterns whose takes differ there
+//! (`BETWEEN_TWO_GAP`); every gate still judges the first window.
 //! Each onset is decided once, so a sound never gives two events. A
 //! sound whose strength (its amplitude against the take's over the decision window) is
 //! below `min_strength` is not the user's (a voice across the room, a breath) and does not
