@@ -916,6 +916,15 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             0.03
         };
         assert!((0.015..=most).contains(&heard), "{o}");
+        // More than one window, and it says why.
+        let waited = o["waited_for"].as_str();
+        assert_eq!(heard > 0.03, waited.is_some(), "{o}");
+        if let Some(why) = waited {
+            assert!(
+                ["pair_alike_at_first", "between_two", "over_tail"].contains(&why),
+                "{o}"
+            );
+        }
     }
     // The same, as a table on stderr.
     let table = stderr(&out);

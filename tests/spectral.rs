@@ -1094,7 +1094,15 @@ fn an_instance_between_two_patterns_is_decided_over_two_windows() {
             impulse("bright", burst_then_tone(1.0, 2400.0, 2), settings),
         ];
         let mut det = Detector::new(patterns, settings, RATE).unwrap();
+        det.enable_explain();
         let events = detect_in_blocks(&mut det, &rec, 256);
+        // Each wait says why it waited.
+        let waited = det
+            .take_explain()
+            .unwrap_or_default()
+            .iter()
+            .filter(|r| r.waited_for == Some(onomato::detect::Wait::BetweenTwo))
+            .count();
         let dull_found = dull
             .iter()
             .filter(|&&t| {
@@ -1103,17 +1111,17 @@ fn an_instance_between_two_patterns_is_decided_over_two_windows() {
                     .any(|e| &*e.pattern == "dull" && (e.time - t).abs() < 0.05)
             })
             .count();
-        (dull_found, events.len())
+        (dull_found, events.len(), waited)
     };
     let two_windows = spectral();
     let one_window = DetectorSettings {
         max_decision_seconds: two_windows.decision_seconds,
         ..spectral()
     };
-    assert_eq!(named_dull(&one_window), (0, 8));
-    let (found, events) = named_dull(&two_windows);
+    assert_eq!(named_dull(&one_window), (0, 8, 0));
+    let (found, events, waited) = named_dull(&two_windows);
     assert!(
-        found >= 3 && events == 8,
-        "{found} of 8 named dull, {events} events"
+        found >= 3 && events == 8 && waited >= found,
+        "{found} of 8 named dull, {events} events, {waited} waited between two"
     );
 }

@@ -460,7 +460,24 @@ pub struct OnsetRecord {
     /// adds to it (`OVER_TAIL_WINDOWS`).
     #[serde(serialize_with = "super::opt_seconds")]
     pub window_seconds: Option<f64>,
+    /// Why the choice heard more than one decision window, when it did.
+    pub waited_for: Option<Wait>,
     pub outcome: Outcome,
+}
+
+/// Why the choice of an onset's pattern waited for more of its sound
+/// ([`OnsetRecord::window_seconds`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Wait {
+    /// Its two best patterns' takes are alike over one window and part later
+    /// ([`Separating`]).
+    PairAlikeAtFirst,
+    /// Its first window lay between its two best patterns (`BETWEEN_TWO_GAP`).
+    BetweenTwo,
+    /// It was judged over a fired word's tail by what a take adds to it
+    /// (`OVER_TAIL_WINDOWS`).
+    OverTail,
 }
 
 impl OnsetRecord {
@@ -480,6 +497,7 @@ impl OnsetRecord {
             explained_over_tail: None,
             guard_by_stopped_speech: false,
             window_seconds: None,
+            waited_for: None,
             outcome,
         }
     }
@@ -1113,12 +1131,15 @@ impl SpectralMatcher {
         // An onset that fires, whose runner-up is a pattern one window cannot tell from
         // its best, is decided between the two over as many windows as part them.
         let mut parted_over = 1;
+        let mut waited_for = (heard_windows > 1).then_some(Wait::OverTail);
         if let Some(q) = self.runner_up(pi) {
             let n = self.patterns.len();
             let mut needed = self.separating[pi * n + q] as usize;
+            let mut why = Wait::PairAlikeAtFirst;
             // Named by its features, not over a tail, where the features are the tail's.
             if needed < BETWEEN_TWO_WINDOWS && heard_windows == 1 && self.between_two(pi, q) {
                 needed = BETWEEN_TWO_WINDOWS;
+                why = Wait::BetweenTwo;
             }
             if outcome == Outcome::Fired
                 && needed > 1
@@ -1129,6 +1150,7 @@ impl SpectralMatcher {
                     return Some(needed);
                 }
                 parted_over = needed;
+                waited_for = Some(why);
                 let [over_p, over_q] = self.scores_over(needed, onset_frame, [pi, q]);
                 if over_q > over_p {
                     pi = q;
@@ -1168,6 +1190,7 @@ impl SpectralMatcher {
                 guard_by_stopped_speech: outcome == Outcome::SpeechGuard
                     && guard == Guard::ClosedByStopped,
                 window_seconds: Some(self.heard_seconds(parted_over.max(heard_windows))),
+                waited_for,
                 outcome,
             };
             if let Some(records) = &mut self.explain {
