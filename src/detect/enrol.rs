@@ -49,6 +49,18 @@ pub(super) struct Template {
     pub(super) later_energy: Vec<f64>,
 }
 
+impl Template {
+    /// The pooled power spectrum of the take's decision window that starts `frames`
+    /// frames after its onset: `pooled_power` at 0, one of `later_power` after; none
+    /// past the take's end.
+    pub(super) fn window_at(&self, frames: usize) -> Option<&[f32]> {
+        match frames {
+            0 => Some(&self.pooled_power),
+            k => self.later_power.get((k - 1) * BANDS..k * BANDS),
+        }
+    }
+}
+
 /// An impulse pattern's takes are each moved this many times their pattern's mean
 /// towards it (and scaled back to unit norm): two thirds of the way. A sound is scored
 /// by its best take, so a pattern of several takes that differ reaches further, and
@@ -109,8 +121,7 @@ pub(super) fn window_power(
 ) {
     out.copy_from_slice(&template.pooled_power);
     for w in 1..windows {
-        let k = w * decision_frames;
-        if let Some(later) = template.later_power.get((k - 1) * BANDS..k * BANDS) {
+        if let Some(later) = template.window_at(w * decision_frames) {
             for (o, x) in out.iter_mut().zip(later) {
                 *o += x;
             }

@@ -1416,15 +1416,8 @@ impl SpectralMatcher {
             if self.patterns[t.pattern].kind != PatternKind::Impulse {
                 continue;
             }
-            // The take's window as far after its onset: its first, or the one its
-            // later sound starts `k` frames on (none when the take is shorter).
-            let take = match window {
-                1 => Some(&t.pooled_power[..]),
-                _ => t
-                    .later_power
-                    .get((window - 1) * k * BANDS - BANDS..(window - 1) * k * BANDS),
-            };
-            let explained = take.map_or(0.0, |take| {
+            // The take's window as far after its onset (none when the take is shorter).
+            let explained = t.window_at((window - 1) * k).map_or(0.0, |take| {
                 share_explained_over_tail(&onset, &before, self.room.noise(), take, bands)
             });
             *share = if window == 1 {
@@ -1482,13 +1475,10 @@ impl SpectralMatcher {
         let take = &self.templates[last.template];
         lags.into_iter().any(|lag| {
             windows.iter().enumerate().all(|(w, onset)| {
-                let at = lag + w * k;
-                take.later_power
-                    .get((at - 1) * BANDS..at * BANDS)
-                    .is_some_and(|later| {
-                        share_explained_over_tail(onset, &before, self.room.noise(), later, bands)
-                            >= new_share
-                    })
+                take.window_at(lag + w * k).is_some_and(|later| {
+                    share_explained_over_tail(onset, &before, self.room.noise(), later, bands)
+                        >= new_share
+                })
             })
         })
     }
@@ -1768,12 +1758,11 @@ impl SpectralMatcher {
         let template = &self.templates[last.template];
         let energy = self.decision_window_energy(time_sample);
         for k in lags {
-            self.room.take(
-                &template.later_power[(k - 1) * BANDS..k * BANDS],
-                None,
-                &self.analyzer.cepstrum,
-                &mut self.heard_take,
-            );
+            let Some(later) = template.window_at(k) else {
+                continue;
+            };
+            self.room
+                .take(later, None, &self.analyzer.cepstrum, &mut self.heard_take);
             let similarity = similarity(&self.heard_take, &self.instance);
             let expected = template.later_energy[k - 1] * last.strength * last.strength;
             let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
