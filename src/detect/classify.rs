@@ -160,17 +160,37 @@ pub(super) struct TrackParams {
     /// Confident: at least this far over its pattern's threshold, and its pattern the
     /// best of all.
     pub(super) confidence: f32,
+    /// How many of a pattern's latest clear instances are kept as templates too.
+    pub(super) recent: usize,
 }
 
 impl Default for TrackParams {
     /// Swept over every dev set in `docs/classify.md` ("The matching's own settings";
-    /// without tracking the mean F1 falls by 0.034, most of it on real hits).
+    /// without tracking the mean F1 falls by 0.034, most of it on real hits; "The
+    /// latest clear instances as templates" for `recent`).
     fn default() -> Self {
         Self {
             rate: 0.5,
             confidence: 0.15,
+            recent: 4,
         }
     }
+}
+
+/// An instance that fired, as tracking is told of it.
+pub(super) struct FiredInstance<'a> {
+    /// Its features (unit norm) where its pattern scored best.
+    pub(super) features: &'a [f32],
+    /// Its pattern's score, over takes and tracked templates alike...
+    pub(super) score: f32,
+    /// ...and over the enrolled takes alone.
+    pub(super) take_score: f32,
+    /// The best score of any other pattern.
+    pub(super) other: f32,
+    /// Its pattern's threshold.
+    pub(super) threshold: f32,
+    /// Whether it began over the tail of an impulse that fired.
+    pub(super) over_fired_impulse: bool,
 }
 
 /// Follows a voice that drifts: a performer's "k" an hour in is not the "k" of the
@@ -181,10 +201,14 @@ impl Default for TrackParams {
 /// `TrackParams::rate` towards itself. The takes stay as enrolled, and every pattern
 /// has one tracked template however many takes it has, so no pattern gains weight by
 /// being heard more. Asking the instance also to stand a margin over every other
-/// pattern kept hits alike from following their voice (`docs/classify.md`). A new
-/// template from every confident instance instead (up to 8 per pattern) cost the
-/// isolated set of `examples/eval_beatbox.rs` at 30-120 ms gaps 0.07-0.09 when it was
-/// tried (with plain correlations, before `LIFTER_POWER`).
+/// pattern kept hits alike from following their voice (`docs/classify.md`).
+///
+/// An average blurs a sound its user makes two ways, so a pattern also keeps its
+/// latest `TrackParams::recent` clear instances as they were. Clear is asked of the
+/// enrolled takes alone, so that no kept instance lets in the next one (a rule that
+/// fed on its own decisions would carry one confusion on for good): the takes score
+/// it `confidence` over its threshold and over every other pattern. And it began out
+/// of quiet, since over a fired word's tail its features are partly that tail's.
 pub(super) struct Tracked {
     params: TrackParams,
     features: usize,
@@ -192,6 +216,12 @@ pub(super) struct Tracked {
     templates: Vec<f32>,
     /// Per pattern: whether a confident instance has been heard yet.
     set: Vec<bool>,
+    /// Per pattern, `params.recent` slots of `features` values: its latest clear
+    /// instances.
+    recent: Vec<f32>,
+    /// Per pattern: how many of its slots hold an instance, and the slot written next.
+    recent_held: Vec<usize>,
+    recent_next: Vec<usize>,
 }
 
 impl Tracked {
@@ -201,13 +231,18 @@ impl Tracked {
             features,
             templates: vec![0.0; patterns * features],
             set: vec![false; patterns],
+            recent: vec![0.0; patterns * params.recent * features],
+            recent_held: vec![0; patterns],
+            recent_next: vec![0; patterns],
         }
     }
 
-    /// Forgets every tracked template (the features they were made of are no longer
-    /// those compared).
+    /// Forgets every tracked template and kept instance (the features they were made
+    /// of are no longer those compared).
     pub(super) fn forget(&mut self) {
         self.set.fill(false);
+        self.recent_held.fill(0);
+        self.recent_next.fill(0);
     }
 
     /// Pattern `pattern`'s tracked template, once a confident instance has set it.
@@ -216,28 +251,41 @@ impl Tracked {
         self.set[pattern].then(|| &self.templates[pattern * n..(pattern + 1) * n])
     }
 
-    /// An instance (unit-norm `instance`) that fired as `pattern`, which scored `best`
-    /// against a threshold of `threshold` while no other pattern scored over `second`.
-    pub(super) fn follow(
-        &mut self,
-        pattern: usize,
-        instance: &[f32],
-        best: f32,
-        second: f32,
-        threshold: f32,
-    ) {
-        if best < threshold + self.params.confidence || best < second {
+    /// Pattern `pattern`'s tracked template and its kept instances, each scored as a
+    /// take is.
+    pub(super) fn templates(&self, pattern: usize) -> impl Iterator<Item = &[f32]> {
+        let n = self.features;
+        let first = pattern * self.params.recent;
+        let kept = (first..first + self.recent_held[pattern])
+            .map(move |slot| &self.recent[slot * n..(slot + 1) * n]);
+        self.template(pattern).into_iter().chain(kept)
+    }
+
+    /// An instance that fired as `pattern`.
+    pub(super) fn follow(&mut self, pattern: usize, instance: &FiredInstance) {
+        let confident = self.params.confidence;
+        let clear = !instance.over_fired_impulse
+            && instance.take_score >= instance.threshold + confident
+            && instance.take_score >= instance.other + confident;
+        if clear && self.params.recent > 0 {
+            let n = self.features;
+            let slot = pattern * self.params.recent + self.recent_next[pattern];
+            self.recent[slot * n..(slot + 1) * n].copy_from_slice(instance.features);
+            self.recent_next[pattern] = (self.recent_next[pattern] + 1) % self.params.recent;
+            self.recent_held[pattern] = (self.recent_held[pattern] + 1).min(self.params.recent);
+        }
+        if instance.score < instance.threshold + confident || instance.score < instance.other {
             return;
         }
         let n = self.features;
         let template = &mut self.templates[pattern * n..(pattern + 1) * n];
         if self.set[pattern] {
-            for (t, x) in template.iter_mut().zip(instance) {
+            for (t, x) in template.iter_mut().zip(instance.features) {
                 *t += self.params.rate * (x - *t);
             }
             scale_to_unit(template);
         } else {
-            template.copy_from_slice(instance);
+            template.copy_from_slice(instance.features);
             self.set[pattern] = true;
         }
     }
@@ -522,15 +570,38 @@ mod tests {
         v
     }
 
+    /// An instance of pattern 0 that scored `score` over takes and tracked templates
+    /// alike, `take_score` over its takes alone, `other` for the best other pattern,
+    /// against a threshold of 0.3, out of quiet.
+    fn fired(features: &[f32], score: f32, take_score: f32, other: f32) -> FiredInstance<'_> {
+        FiredInstance {
+            features,
+            score,
+            take_score,
+            other,
+            threshold: 0.3,
+            over_fired_impulse: false,
+        }
+    }
+
+    /// Pattern 0's tracked templates and kept instances, in order.
+    fn templates_of(tracked: &Tracked) -> Vec<Vec<f32>> {
+        tracked.templates(0).map(<[f32]>::to_vec).collect()
+    }
+
     #[test]
     fn a_confident_instance_sets_the_tracked_template_then_moves_it_halfway() {
-        let mut tracked = Tracked::new(TrackParams::default(), 2, 3);
+        let params = TrackParams {
+            recent: 0,
+            ..TrackParams::default()
+        };
+        let mut tracked = Tracked::new(params, 2, 3);
         assert!(tracked.template(0).is_none());
         let (first, second) = (unit(&[1.0, 0.0, 0.0]), unit(&[0.0, 1.0, 0.0]));
-        tracked.follow(0, &first, 0.9, 0.5, 0.3);
+        tracked.follow(0, &fired(&first, 0.9, 0.9, 0.5));
         assert_eq!(tracked.template(0), Some(&first[..]));
         assert!(tracked.template(1).is_none());
-        tracked.follow(0, &second, 0.9, 0.5, 0.3);
+        tracked.follow(0, &fired(&second, 0.9, 0.9, 0.5));
         // Halfway between the two, scaled back to unit norm.
         let halfway = unit(&[1.0, 1.0, 0.0]);
         let now = tracked.template(0).unwrap();
@@ -538,6 +609,7 @@ mod tests {
             now.iter().zip(&halfway).all(|(a, b)| (a - b).abs() < 1e-6),
             "{now:?}"
         );
+        assert_eq!(templates_of(&tracked), vec![now.to_vec()]);
     }
 
     #[test]
@@ -545,11 +617,56 @@ mod tests {
         let mut tracked = Tracked::new(TrackParams::default(), 2, 3);
         let x = unit(&[1.0, 0.0, 0.0]);
         // Under the threshold plus the confidence.
-        tracked.follow(0, &x, 0.44, 0.1, 0.3);
+        tracked.follow(0, &fired(&x, 0.44, 0.44, 0.1));
         // Another pattern scored more.
-        tracked.follow(0, &x, 0.9, 0.95, 0.3);
+        tracked.follow(0, &fired(&x, 0.9, 0.9, 0.95));
         assert!(tracked.template(0).is_none());
-        tracked.follow(0, &x, 0.46, 0.1, 0.3);
+        assert!(templates_of(&tracked).is_empty());
+        tracked.follow(0, &fired(&x, 0.46, 0.46, 0.1));
         assert!(tracked.template(0).is_some());
+    }
+
+    #[test]
+    fn the_latest_clear_instances_are_kept_as_they_were() {
+        let params = TrackParams::default();
+        let mut tracked = Tracked::new(params, 2, 3);
+        let instances: Vec<Vec<f32>> = (0..params.recent + 2)
+            .map(|i| unit(&[1.0, i as f32, 0.0]))
+            .collect();
+        for x in &instances {
+            tracked.follow(0, &fired(x, 0.9, 0.9, 0.5));
+        }
+        let kept = templates_of(&tracked);
+        // The tracked template, then the last `recent` instances (in the ring's order).
+        assert_eq!(kept.len(), 1 + params.recent);
+        let mut latest: Vec<Vec<f32>> = instances[2..].to_vec();
+        latest.rotate_left(params.recent - 2);
+        assert_eq!(kept[1..].to_vec(), latest);
+        assert!(tracked.templates(1).next().is_none());
+        tracked.forget();
+        assert!(templates_of(&tracked).is_empty());
+    }
+
+    #[test]
+    fn only_an_instance_its_takes_alone_find_clear_and_out_of_quiet_is_kept() {
+        let mut tracked = Tracked::new(TrackParams::default(), 2, 3);
+        let x = unit(&[1.0, 0.0, 0.0]);
+        // Confident through a tracked template, but its takes alone score it under the
+        // threshold plus the confidence: it moves the tracked template, is not kept.
+        tracked.follow(0, &fired(&x, 0.9, 0.44, 0.5));
+        assert_eq!(templates_of(&tracked).len(), 1);
+        // Its takes find it over the threshold, but within the confidence of another
+        // pattern: between the two, not kept.
+        tracked.follow(0, &fired(&x, 0.9, 0.9, 0.8));
+        assert_eq!(templates_of(&tracked).len(), 1);
+        // Clear, but begun over a fired impulse's tail.
+        let over_tail = FiredInstance {
+            over_fired_impulse: true,
+            ..fired(&x, 0.9, 0.9, 0.5)
+        };
+        tracked.follow(0, &over_tail);
+        assert_eq!(templates_of(&tracked).len(), 1);
+        tracked.follow(0, &fired(&x, 0.9, 0.9, 0.5));
+        assert_eq!(templates_of(&tracked).len(), 2);
     }
 }

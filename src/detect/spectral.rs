@@ -76,7 +76,7 @@ use serde::Serialize;
 
 use super::background::BackgroundModel;
 use super::classify::{
-    default_noise_over_floor, share_explained_over_tail, Room, TrackParams, Tracked,
+    default_noise_over_floor, share_explained_over_tail, FiredInstance, Room, TrackParams, Tracked,
 };
 use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
@@ -1274,7 +1274,7 @@ impl SpectralMatcher {
             strength,
         });
         if kind == PatternKind::Impulse {
-            self.track(pi);
+            self.track(pi, evidence.over_fired_impulse);
             self.copies.fired(time_sample, pi);
         }
         out.push(decided);
@@ -1648,37 +1648,37 @@ impl SpectralMatcher {
                 .background_score
                 .max(self.background.nearest(&self.instance));
             for (pi, s) in self.pattern_scores.iter_mut().enumerate() {
-                let Some(tracked) = self.tracked.template(pi) else {
-                    continue;
-                };
-                let score = similarity(tracked, &self.instance);
-                s.score = s.score.max(score);
-                if score > best {
-                    best = score;
-                    self.best_instance.copy_from_slice(&self.instance);
+                for tracked in self.tracked.templates(pi) {
+                    let score = similarity(tracked, &self.instance);
+                    s.score = s.score.max(score);
+                    if score > best {
+                        best = score;
+                        self.best_instance.copy_from_slice(&self.instance);
+                    }
                 }
             }
         }
     }
 
-    /// Lets the tracked template of `pi`, which fired, follow this instance
-    /// ([`Tracked::follow`]).
-    fn track(&mut self, pi: usize) {
-        let best = self.pattern_scores[pi].score;
-        let second = self
+    /// Lets the tracked templates of `pi`, which fired, follow this instance
+    /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail.
+    fn track(&mut self, pi: usize, over_fired_impulse: bool) {
+        let other = self
             .pattern_scores
             .iter()
             .enumerate()
             .filter(|&(p, _)| p != pi)
             .map(|(_, s)| s.score)
             .fold(f32::NEG_INFINITY, f32::max);
-        self.tracked.follow(
-            pi,
-            &self.best_instance,
-            best,
-            second,
-            self.patterns[pi].threshold,
-        );
+        let instance = FiredInstance {
+            features: &self.best_instance,
+            score: self.pattern_scores[pi].score,
+            take_score: self.pattern_scores[pi].take_score,
+            other,
+            threshold: self.patterns[pi].threshold,
+            over_fired_impulse,
+        };
+        self.tracked.follow(pi, &instance);
     }
 
     /// Energy of the samples (received so far) of the decision window from
