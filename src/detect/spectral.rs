@@ -36,7 +36,8 @@
 //! takes drawn two thirds of the way towards their mean, `TAKE_SHRINK`), each take as
 //! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
-//! the voice as it drifts from the takes ([`super::classify::Tracked`]). The best pattern
+//! the voice as it drifts from the takes, and keeps its latest clear instances as they
+//! were ([`super::classify::Tracked`]). The best pattern
 //! wins if its score passes its threshold; below, the sound is none of the patterns and
 //! nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
@@ -503,8 +504,8 @@ impl OnsetRecord {
     }
 }
 
-/// One pattern's score for an onset: the best of its takes and of its tracked
-/// template, and which take scored best.
+/// One pattern's score for an onset: the best of its takes, its tracked template and
+/// its kept instances; and which take scored best, and how well.
 #[derive(Clone, Copy)]
 struct PatternScore {
     score: f32,
@@ -1614,8 +1615,8 @@ impl SpectralMatcher {
     }
 
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
-    /// tracked template, at each shift, into `pattern_scores`; keeps the features that
-    /// scored best in `best_instance`.
+    /// tracked template and kept instances, at each shift, into `pattern_scores`; keeps
+    /// the features that scored best in `best_instance`.
     fn score_patterns(&mut self, onset_frame: u64) {
         self.pattern_scores.fill(PatternScore::NONE);
         self.background_score = f32::NEG_INFINITY;
