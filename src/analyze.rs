@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::Config;
 use crate::detect::waveform::TakeTrace;
-use crate::detect::{DetectError, Detector, Event, OnsetRecord};
+use crate::detect::{DetectError, Detector, Event, MatchedBy, OnsetRecord};
 use crate::pattern::{self, PatternError};
 use crate::solver::{self, Contact};
 
@@ -202,11 +202,13 @@ pub fn write_json(
 /// with their scores, its strength, the nearest background sound's score, its rise
 /// (marked `*` when it began over an impulse that fired), over such a word's tail the
 /// share of its sound its pattern's takes explain there (`new`), how much of its sound
-/// the choice of its pattern heard, and what became of it (`--explain`, on stderr).
+/// the choice of its pattern heard, what of its best pattern it resembled most (a take,
+/// the tracked template or a kept instance), and what became of it (`--explain`, on
+/// stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  outcome",
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  outcome",
         "onset s",
         "best",
         "score",
@@ -216,14 +218,15 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
         "speech",
         "rise dB",
         "new",
-        "heard ms"
+        "heard ms",
+        "by"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {}{}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {}{}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -238,6 +241,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             num(r.explained_over_tail),
             r.window_seconds
                 .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
+            r.matched_by.map_or("-", MatchedBy::as_str),
             r.outcome.as_str(),
             if r.guard_by_stopped_speech { "*" } else { "" },
         )?;

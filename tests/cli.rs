@@ -925,10 +925,25 @@ fn explain_lists_every_onset_with_what_became_of_it() {
                 "{o}"
             );
         }
+        // And what of its best pattern it resembled most.
+        let by = o["matched_by"]
+            .as_str()
+            .unwrap_or_else(|| panic!("no matched_by: {o}"));
+        assert!(["take", "tracked", "kept"].contains(&by), "{o}");
     }
+    // A repeated sound is soon matched by what tracking kept of it, not only the takes.
+    assert!(
+        onsets
+            .iter()
+            .any(|o| o["outcome"] == "fired" && o["matched_by"] != "take"),
+        "every fired onset matched a take"
+    );
     // The same, as a table on stderr.
     let table = stderr(&out);
-    assert!(table.contains("outcome"), "{table}");
+    assert!(
+        table.contains("outcome") && table.contains(" by "),
+        "{table}"
+    );
     assert_eq!(
         table.lines().filter(|l| l.ends_with(" fired")).count(),
         events.len()

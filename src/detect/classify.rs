@@ -251,14 +251,12 @@ impl Tracked {
         self.set[pattern].then(|| &self.templates[pattern * n..(pattern + 1) * n])
     }
 
-    /// Pattern `pattern`'s tracked template and its kept instances, each scored as a
-    /// take is.
-    pub(super) fn templates(&self, pattern: usize) -> impl Iterator<Item = &[f32]> {
+    /// Pattern `pattern`'s kept instances, each scored as a take is.
+    pub(super) fn kept(&self, pattern: usize) -> impl Iterator<Item = &[f32]> {
         let n = self.features;
         let first = pattern * self.params.recent;
-        let kept = (first..first + self.recent_held[pattern])
-            .map(move |slot| &self.recent[slot * n..(slot + 1) * n]);
-        self.template(pattern).into_iter().chain(kept)
+        (first..first + self.recent_held[pattern])
+            .map(move |slot| &self.recent[slot * n..(slot + 1) * n])
     }
 
     /// An instance that fired as `pattern`.
@@ -584,9 +582,15 @@ mod tests {
         }
     }
 
-    /// Pattern 0's tracked templates and kept instances, in order.
+    /// Pattern 0's tracked template and kept instances, in order.
     fn templates_of(tracked: &Tracked) -> Vec<Vec<f32>> {
-        tracked.templates(0).map(<[f32]>::to_vec).collect()
+        let kept = tracked.kept(0);
+        tracked
+            .template(0)
+            .into_iter()
+            .chain(kept)
+            .map(<[f32]>::to_vec)
+            .collect()
     }
 
     #[test]
@@ -642,7 +646,7 @@ mod tests {
         let mut latest: Vec<Vec<f32>> = instances[2..].to_vec();
         latest.rotate_left(params.recent - 2);
         assert_eq!(kept[1..].to_vec(), latest);
-        assert!(tracked.templates(1).next().is_none());
+        assert!(tracked.kept(1).next().is_none());
         tracked.forget();
         assert!(templates_of(&tracked).is_empty());
     }

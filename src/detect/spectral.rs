@@ -463,6 +463,9 @@ pub struct OnsetRecord {
     pub window_seconds: Option<f64>,
     /// Why the choice heard more than one decision window, when it did.
     pub waited_for: Option<Wait>,
+    /// What of its best pattern its first window resembled most: a take, the tracked
+    /// template or a kept instance.
+    pub matched_by: Option<MatchedBy>,
     pub outcome: Outcome,
 }
 
@@ -479,6 +482,30 @@ pub enum Wait {
     /// It was judged over a fired word's tail by what a take adds to it
     /// (`OVER_TAIL_WINDOWS`).
     OverTail,
+}
+
+/// What of its best pattern an onset's first window resembled most
+/// ([`OnsetRecord::matched_by`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchedBy {
+    /// One of the pattern's enrolled takes.
+    Take,
+    /// The template that follows the voice as it drifts ([`Tracked`]).
+    Tracked,
+    /// One of the pattern's latest clear instances, kept as it was ([`Tracked`]).
+    Kept,
+}
+
+impl MatchedBy {
+    /// The name `--explain` prints.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Take => "take",
+            Self::Tracked => "tracked",
+            Self::Kept => "kept",
+        }
+    }
 }
 
 impl OnsetRecord {
@@ -499,6 +526,7 @@ impl OnsetRecord {
             guard_by_stopped_speech: false,
             window_seconds: None,
             waited_for: None,
+            matched_by: None,
             outcome,
         }
     }
@@ -509,6 +537,8 @@ impl OnsetRecord {
 #[derive(Clone, Copy)]
 struct PatternScore {
     score: f32,
+    /// What gave `score`.
+    matched_by: MatchedBy,
     take: usize,
     take_score: f32,
 }
@@ -516,6 +546,7 @@ struct PatternScore {
 impl PatternScore {
     const NONE: Self = Self {
         score: f32::NEG_INFINITY,
+        matched_by: MatchedBy::Take,
         take: usize::MAX,
         take_score: f32::NEG_INFINITY,
     };
@@ -1192,6 +1223,7 @@ impl SpectralMatcher {
                     && guard == Guard::ClosedByStopped,
                 window_seconds: Some(self.heard_seconds(parted_over.max(heard_windows))),
                 waited_for,
+                matched_by: Some(self.pattern_scores[pi].matched_by),
                 outcome,
             };
             if let Some(records) = &mut self.explain {
@@ -1639,7 +1671,10 @@ impl SpectralMatcher {
                     s.take_score = score;
                     s.take = ti;
                 }
-                s.score = s.score.max(score);
+                if score > s.score {
+                    s.score = score;
+                    s.matched_by = MatchedBy::Take;
+                }
                 if score > best {
                     best = score;
                     self.best_instance.copy_from_slice(&self.instance);
@@ -1649,9 +1684,14 @@ impl SpectralMatcher {
                 .background_score
                 .max(self.background.nearest(&self.instance));
             for (pi, s) in self.pattern_scores.iter_mut().enumerate() {
-                for tracked in self.tracked.templates(pi) {
-                    let score = similarity(tracked, &self.instance);
-                    s.score = s.score.max(score);
+                let tracked = self.tracked.template(pi).map(|t| (MatchedBy::Tracked, t));
+                let kept = self.tracked.kept(pi).map(|t| (MatchedBy::Kept, t));
+                for (by, template) in tracked.into_iter().chain(kept) {
+                    let score = similarity(template, &self.instance);
+                    if score > s.score {
+                        s.score = score;
+                        s.matched_by = by;
+                    }
                     if score > best {
                         best = score;
                         self.best_instance.copy_from_slice(&self.instance);
