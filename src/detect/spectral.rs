@@ -824,7 +824,7 @@ impl SpectralMatcher {
     /// Makes everything that depends on the bands compared again for the first
     /// `bands`: the cepstrum, the takes' features and their shrink, the held patterns'
     /// spectra, the pairs' waits, the background's features; the tracked templates
-    /// start again. Allocates nothing: called while a stream runs, when it turns out to
+    /// and kept instances start again. Allocates nothing: called while a stream runs, when it turns out to
     /// carry fewer bands than the takes ([`Passband`]).
     fn compare_bands(&mut self, bands: usize) {
         let cepstrum = &mut self.analyzer.cepstrum;
