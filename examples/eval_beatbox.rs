@@ -612,10 +612,25 @@ fn number_option(args: &[String], name: &str, expected: &str) -> Option<f64> {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let Some(dir) = args.first().map(PathBuf::from) else {
-        eprintln!("usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated] [--speech-guard SECONDS] [--min-strength X] [--decision-seconds SECONDS]");
+    const USAGE: &str = "usage: eval_beatbox BEATBOX_DIR [--method waveform|spectral] [--threshold X] [--verbose] [--set isolated|beats|repeated] [--speech-guard SECONDS] [--min-strength X] [--decision-seconds SECONDS]";
+    let Some(dir) = args
+        .first()
+        .filter(|a| !a.starts_with("--"))
+        .map(PathBuf::from)
+    else {
+        eprintln!("{USAGE}");
         std::process::exit(2);
     };
+    // The folders each set reads (../shared/data/beatbox has them all).
+    for sub in ["isolated", "beats", "repeated"] {
+        if !dir.join(sub).is_dir() {
+            eprintln!(
+                "{}: expected a beatbox folder holding isolated/, beats/ and repeated/, found no {sub}/\n{USAGE}",
+                dir.display()
+            );
+            std::process::exit(2);
+        }
+    }
     let methods = match option_value(&args, "--method") {
         Some("waveform") => vec![Method::Waveform],
         Some("spectral") => vec![Method::Spectral],
