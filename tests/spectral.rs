@@ -105,6 +105,24 @@ fn sequence_in_noise(
     (rec, truth, gains)
 }
 
+/// Appends `sound` to `rec` as an impulse of `label`, annotated in `truth` where it
+/// begins, then `quiet_seconds` of silence.
+fn append_impulse(
+    rec: &mut Vec<f32>,
+    truth: &mut Vec<Annotation>,
+    label: &str,
+    sound: &[f32],
+    quiet_seconds: f64,
+) {
+    truth.push(Annotation {
+        onset: rec.len() as f64 / f64::from(RATE),
+        label: label.into(),
+        end: None,
+    });
+    rec.extend_from_slice(sound);
+    rec.extend(vec![0.0; samples_for(quiet_seconds, RATE)]);
+}
+
 fn detect(settings: &DetectorSettings, rec: &[f32], block: usize) -> Vec<Event> {
     let mut det = Detector::new(enrol(settings), settings, RATE).unwrap();
     detect_in_blocks(&mut det, rec, block)
@@ -222,14 +240,7 @@ fn held_sounds_are_one_event_each_with_their_span() {
         });
         rec.extend(chhh(*seconds, 50 + i as u64).iter().map(|v| v * 0.7));
         rec.extend(vec![0.0; samples_for(0.4, RATE)]);
-        let at = rec.len() as f64 / f64::from(RATE);
-        truth.push(Annotation {
-            onset: at,
-            label: "b".into(),
-            end: None,
-        });
-        rec.extend(kick(60 + i as u64));
-        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+        append_impulse(&mut rec, &mut truth, "b", &kick(60 + i as u64), 0.4);
     }
     add_noise(&mut rec, 0.0005, 9);
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
@@ -592,24 +603,15 @@ fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
     // after it are still theirs.
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
-    let mut mark = |rec: &mut Vec<f32>, label: &str, sound: Vec<f32>| {
-        truth.push(Annotation {
-            onset: rec.len() as f64 / f64::from(RATE),
-            label: label.into(),
-            end: None,
-        });
-        rec.extend(sound);
-        rec.extend(vec![0.0; samples_for(0.3, RATE)]);
-    };
     let mut factor = 1.0;
     while factor < 2.0 {
         factor *= 1.04;
-        mark(&mut rec, "pew", pew(factor));
+        append_impulse(&mut rec, &mut truth, "pew", &pew(factor), 0.3);
     }
     for seed in 2..5 {
-        mark(&mut rec, "b", kick(seed));
-        mark(&mut rec, "ts", hat(seed));
-        mark(&mut rec, "pew", pew(factor));
+        append_impulse(&mut rec, &mut truth, "b", &kick(seed), 0.3);
+        append_impulse(&mut rec, &mut truth, "ts", &hat(seed), 0.3);
+        append_impulse(&mut rec, &mut truth, "pew", &pew(factor), 0.3);
     }
     add_noise(&mut rec, 0.0005, 16);
     let run = |rec: &[f32]| {
@@ -650,13 +652,7 @@ fn a_sound_made_two_ways_is_found_each_way_it_was_heard_clearly() {
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
     for factor in [0.9, 1.12, 0.86, 1.12, 0.86, 1.12, 0.86, 1.12] {
-        truth.push(Annotation {
-            onset: rec.len() as f64 / f64::from(RATE),
-            label: "pew".into(),
-            end: None,
-        });
-        rec.extend(pew(factor));
-        rec.extend(vec![0.0; samples_for(0.3, RATE)]);
+        append_impulse(&mut rec, &mut truth, "pew", &pew(factor), 0.3);
     }
     add_noise(&mut rec, 0.0005, 16);
     let (events, outcomes) = detect_explained(patterns, &settings, &rec);
@@ -682,13 +678,7 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
         let click = noise_burst(RATE, 0.004, 0.002, 500 + i);
         rec.extend(click.iter().map(|v| v * 0.02));
         rec.extend(vec![0.0; samples_for(lead, RATE) - click.len()]);
-        truth.push(Annotation {
-            onset: rec.len() as f64 / f64::from(RATE),
-            label: label.into(),
-            end: None,
-        });
-        rec.extend(maker(label)(300 + i));
-        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+        append_impulse(&mut rec, &mut truth, label, &maker(label)(300 + i), 0.4);
     }
     add_noise(&mut rec, 0.0002, 9);
     let events = detect(&settings, &rec, 256);

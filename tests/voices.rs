@@ -558,6 +558,22 @@ fn f1_against(events: &[onomato::Event], truth: &[(&str, f64)]) -> (f64, String)
     (f1, account)
 }
 
+/// Appends a copy of `pattern`'s take at `gain_db` to `rec`, annotated in `truth` where
+/// it begins, then 0.08-0.5 s of silence drawn from `rng` (the exact-copy protocol's
+/// gaps).
+fn append_copy<'a>(
+    rec: &mut Vec<f32>,
+    truth: &mut Vec<(&'a str, f64)>,
+    pattern: &'a Pattern,
+    gain_db: f64,
+    rng: &mut Rng,
+) {
+    let gain = 10f32.powf(gain_db as f32 / 20.0);
+    truth.push((&*pattern.name, rec.len() as f64 / f64::from(RATE)));
+    rec.extend(pattern.takes[0].samples.iter().map(|v| v * gain));
+    rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
+}
+
 /// `rec`, copies of the takes of `patterns` at `truth`, with 0.3 s of silence after it
 /// and noise 50 dB below full scale (`noise_seed`): every copy is found with its label,
 /// and nothing else is.
@@ -634,16 +650,13 @@ fn exact_copies_whose_soft_start_the_noise_hides_are_found() {
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
     for copy in 0..24 {
-        let p = &patterns[copy % patterns.len()];
         let gain_db = if copy % 2 == 0 {
             rng.range(-12.0, -10.0)
         } else {
             rng.range(-6.0, 0.0)
         };
-        let gain = 10f32.powf(gain_db as f32 / 20.0);
-        truth.push((&*p.name, rec.len() as f64 / f64::from(RATE)));
-        rec.extend(p.takes[0].samples.iter().map(|v| v * gain));
-        rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
+        let p = &patterns[copy % patterns.len()];
+        append_copy(&mut rec, &mut truth, p, gain_db, &mut rng);
     }
     every_copy_is_found(&patterns, &settings, rec, &truth, 8);
 }
@@ -678,11 +691,9 @@ fn an_exact_copy_whose_later_sound_rises_out_of_its_soft_start_fires_once() {
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
     for copy in 0..36 {
+        let gain_db = rng.range(-12.0, 0.0);
         let p = &patterns[copy % patterns.len()];
-        let gain = 10f32.powf(rng.range(-12.0, 0.0) as f32 / 20.0);
-        truth.push((&*p.name, rec.len() as f64 / f64::from(RATE)));
-        rec.extend(p.takes[0].samples.iter().map(|v| v * gain));
-        rec.extend(vec![0.0; samples_for(rng.range(0.08, 0.5), RATE)]);
+        append_copy(&mut rec, &mut truth, p, gain_db, &mut rng);
     }
     every_copy_is_found(&patterns, &settings, rec, &truth, 12);
 }

@@ -261,12 +261,11 @@ impl Tracked {
 
     /// An instance that fired as `pattern`.
     pub(super) fn follow(&mut self, pattern: usize, instance: &FiredInstance) {
-        let confident = self.params.confidence;
+        let (n, confident) = (self.features, self.params.confidence);
         let clear = !instance.over_fired_impulse
             && instance.take_score >= instance.threshold + confident
             && instance.take_score >= instance.other + confident;
         if clear && self.params.recent > 0 {
-            let n = self.features;
             let slot = pattern * self.params.recent + self.recent_next[pattern];
             self.recent[slot * n..(slot + 1) * n].copy_from_slice(instance.features);
             self.recent_next[pattern] = (self.recent_next[pattern] + 1) % self.params.recent;
@@ -275,7 +274,6 @@ impl Tracked {
         if instance.score < instance.threshold + confident || instance.score < instance.other {
             return;
         }
-        let n = self.features;
         let template = &mut self.templates[pattern * n..(pattern + 1) * n];
         if self.set[pattern] {
             for (t, x) in template.iter_mut().zip(instance.features) {

@@ -15,8 +15,8 @@
 //! (`GateParams::over_tail_share`; it is then named by that take, its features,
 //! mostly the tail's, are not judged, and it is that word's own later sound only where
 //! the fired take's later windows explain it as well), and so on. The levels they
-//! compare are the sound in a frame as the bands hear it (the
-//! rumble under them cut, [`LowCut`]), its power less twice the room's noise (the
+//! compare are the sound in a frame as the bands hear it (the rumble under them cut,
+//! [`LowCut`]), its power less twice the room's noise (the
 //! level stage, [`super::levels`]), so that noise just under a sound neither hides it
 //! nor passes for speech around it; for the rise out of the quiet before, the noise of
 //! whole periods of mains hum.
@@ -37,9 +37,8 @@
 //! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
 //! the voice as it drifts from the takes, and keeps its latest clear instances as they
-//! were ([`super::classify::Tracked`]). The best pattern
-//! wins if its score passes its threshold; below, the sound is none of the patterns and
-//! nothing fires. Two patterns that one window cannot tell apart and that part later
+//! were ([`super::classify::Tracked`]). The best pattern wins if its score passes its
+//! threshold; below, the sound is none of the patterns and nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
 //! windows, up to `max_decision_seconds` (`Separating` in [`super::enrol`],
 //! `SpectralMatcher::scores_over`), and so, over two, is an instance that its first
@@ -824,8 +823,8 @@ impl SpectralMatcher {
     /// Makes everything that depends on the bands compared again for the first
     /// `bands`: the cepstrum, the takes' features and their shrink, the held patterns'
     /// spectra, the pairs' waits, the background's features; the tracked templates
-    /// and kept instances start again. Allocates nothing: called while a stream runs, when it turns out to
-    /// carry fewer bands than the takes ([`Passband`]).
+    /// and kept instances start again. Allocates nothing: called while a stream runs,
+    /// when it turns out to carry fewer bands than the takes ([`Passband`]).
     fn compare_bands(&mut self, bands: usize) {
         let cepstrum = &mut self.analyzer.cepstrum;
         cepstrum.set_bands(bands);
