@@ -10,6 +10,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -24,10 +25,13 @@
 # lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
 # resampled to a full rate on its way in); `sequences` as for rate.
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
-# (an input gain set too high). All repeatable (sox -R).
+# (an input gain set too high).
+# silence: each sequence begins after SECONDS of digital silence (a recording exported
+# with silence before it, a microphone that delivers zeros until it starts), its truth
+# moved as far; the takes as they were. All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,31p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -91,7 +95,14 @@ case $kind in
         [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
         added="every file at $gain_db dB, clipped at full scale"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass or gain" >&2; exit 2 ;;
+    silence)
+        [ $# -eq 1 ] || usage
+        lead=$1
+        [[ $lead =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: silence $lead: expected seconds, such as 0.5" >&2; exit 2; }
+        which=sequences
+        added="the sequences after $lead s of digital silence, the takes as they were"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain or silence" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -104,7 +115,28 @@ for set in "$src"/*/; do
     name=$(basename "$set")
     mkdir -p "$out/$name/patterns"
     cp "$set/set.json" "$out/$name/"
-    for csv in "$set"/seq_*.csv; do cp "$csv" "$out/$name/"; done
+    for csv in "$set"/seq_*.csv; do
+        if [ "$kind" = silence ]; then
+            # Every time in the truth (onset_s, end_s) later by the silence.
+            python3 - "$csv" "$out/$name/$(basename "$csv")" "$lead" <<'PY'
+import csv, sys
+src, dst, lead = sys.argv[1], sys.argv[2], float(sys.argv[3])
+with open(src, newline="") as f:
+    reader = csv.DictReader(f)
+    rows, fields = list(reader), reader.fieldnames
+for row in rows:
+    for key in ("onset_s", "end_s"):
+        if row.get(key):
+            row[key] = f"{float(row[key]) + lead:.4f}"
+with open(dst, "w", newline="") as f:
+    writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+PY
+        else
+            cp "$csv" "$out/$name/"
+        fi
+    done
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
         if [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
@@ -117,6 +149,8 @@ for set in "$src"/*/; do
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$hz"
         elif [ "$kind" = rate ]; then
             sox -R -V1 "$wav" -b 16 -r "$hz" "$out/$name/$rel"
+        elif [ "$kind" = silence ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" pad "$lead" 0
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)
