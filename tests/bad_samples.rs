@@ -72,6 +72,76 @@ fn a_10_ms_burst_of_nan_or_out_of_range_samples_costs_no_sound_0_3_s_after_it() 
     }
 }
 
+/// Digital silence (samples that are all zero: a recording exported with silence before
+/// it, a microphone that delivers zeros until it starts or while it is muted) is no
+/// room. Regression test named after the failure: the room's noise floors took
+/// digital silence for a room, started from nothing and rose 3 dB a second once the
+/// room began: in the bundled example in white noise 29 dB under full scale (RMS), 0.5
+/// s of zeros before it left none of its 10 sounds found (and, on the development sets,
+/// 0.5 s of zeros before D1_noise_zingerbox's sequence in -40 dB of noise left 9 of its
+/// 70 events).
+#[test]
+fn digital_silence_before_or_amid_a_noisy_room_costs_no_sound_after_it() {
+    let (config, clean, rate) = example();
+    let mut noisy = clean;
+    // White noise, its peaks 24 dB under full scale.
+    let mut rng = common::Rng::new(29);
+    for x in &mut noisy {
+        *x += rng.range(-1.0, 1.0) as f32 * 0.063;
+    }
+    let (reference, _) = detect(&config, &noisy, rate);
+    assert!(reference.len() >= 10, "{reference:#?}");
+    let found = |events: &[Event], e: &Event, shift: f64| {
+        events
+            .iter()
+            .any(|d| d.pattern == e.pattern && (d.time - shift - e.time).abs() < 0.005)
+    };
+    // Zeros before the room: the same sounds, as much later. A whole number of the
+    // analysis' 64-sample hops, so that its frames fall on the sounds as they did
+    // (part of a hop moves some marginal decisions: README, "Development sets").
+    for hops in [172, 1034] {
+        let lead = hops * 64;
+        let shift = lead as f64 / f64::from(rate);
+        let mut signal = vec![0.0; lead];
+        signal.extend_from_slice(&noisy);
+        let (events, _) = detect(&config, &signal, rate);
+        for e in &reference {
+            assert!(
+                found(&events, e, shift),
+                "{shift:.2} s of zeros before: {} at {:.3} s lost; found {events:#?}",
+                e.pattern,
+                e.time
+            );
+        }
+        eprintln!(
+            "LEAD {hops} {} of {}",
+            events
+                .iter()
+                .filter(|e| reference
+                    .iter()
+                    .any(|r| found(&events, r, shift) && r.pattern == e.pattern))
+                .count(),
+            reference.len()
+        );
+        assert_eq!(events.len(), reference.len(), "{events:#?}");
+    }
+    // Zeros amid it (the microphone muted for a second): every sound from 0.3 s after
+    // is found, at its time.
+    let (from, to) = (3.5, 4.5);
+    let mut signal = noisy.clone();
+    let at = |s: f64| (s * f64::from(rate)) as usize;
+    signal[at(from)..at(to)].fill(0.0);
+    let (events, _) = detect(&config, &signal, rate);
+    for e in reference.iter().filter(|e| e.time > to + 0.3) {
+        assert!(
+            found(&events, e, 0.0),
+            "muted {from}-{to} s: {} at {:.3} s lost; found {events:#?}",
+            e.pattern,
+            e.time
+        );
+    }
+}
+
 /// `signal` written as a float WAV named `name`, then run through `analyze` (JSON) and
 /// `listen` (replayed at 20x, info log) with the bundled config: both outputs, each
 /// asserted to have succeeded.

@@ -1,7 +1,8 @@
 //! The level stage: how far the sound of each frame stands out of the room's noise.
 //! Three floors follow the room, each as the onset stage's band floors do (towards a
-//! quieter frame quickly, upwards slowly): under the frame's level as the analyser
-//! gives it (the room's noise for placing an onset on the samples), under the frame's
+//! quieter frame quickly, upwards slowly; holding over digital silence, and catching
+//! up with the room after it): under the frame's level as the analyser gives it (the
+//! room's noise for placing an onset on the samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
 //! the quiet-before rise and the spans of recognised sounds read). Runs on the
@@ -66,6 +67,11 @@ pub(super) struct Levels {
     hop_energies: [f64; PERIOD_HOPS],
     /// How many of `hop_energies` hold a hop's (all, once a period has come).
     period_hops_seen: usize,
+    /// Per floor (noise, heard, period): under the sound after digital silence, rising
+    /// to it as fast as a floor falls until a frame meets it.
+    catching_up: [bool; 3],
+    /// The last frame was digital silence.
+    after_silence: bool,
 }
 
 impl Levels {
@@ -83,24 +89,45 @@ impl Levels {
             period_floor_db: 0.0,
             hop_energies: [0.0; PERIOD_HOPS],
             period_hops_seen: 0,
+            catching_up: [false; 3],
+            after_silence: false,
         }
     }
 
     /// The next frame: its level as the analyser gives it (dB), the energy of its
-    /// samples as the bands hear them, and of its newest hop's.
-    pub(super) fn push(&mut self, frame_db: f32, heard: f64, newest_hop: f64) -> FrameLevels {
+    /// samples as the bands hear them, and of its newest hop's; `sound`, whether it
+    /// holds any sound at all (`onset::holds_sound`): over digital silence the floors
+    /// hold, and after it they catch up with the room as the onset stage's do.
+    pub(super) fn push(
+        &mut self,
+        frame_db: f32,
+        heard: f64,
+        newest_hop: f64,
+        sound: bool,
+    ) -> FrameLevels {
         let first = self.frames == 0;
+        let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
         let (rise, fall) = (self.rise_per_frame, self.fall_per_frame);
-        let follow = |floor: f32, level: f32| {
+        let follow = |floor: f32, level: f32, catching: &mut bool| {
             if first {
+                *catching = !sound;
                 level
+            } else if !sound {
+                *catching = true;
+                floor
             } else {
+                let floor = if resumed { floor.max(level) } else { floor };
+                let rise = if *catching { fall } else { rise };
+                if !resumed && level <= floor + rise {
+                    *catching = false;
+                }
                 (floor + rise).min(level.max(floor - fall))
             }
         };
-        self.noise_floor_db = follow(self.noise_floor_db, frame_db);
+        let [noise, heard_catching, period] = &mut self.catching_up;
+        self.noise_floor_db = follow(self.noise_floor_db, frame_db, noise);
         let heard_db = 10.0 * (heard / self.win as f64 + 1e-12).log10() as f32;
-        self.heard_floor_db = follow(self.heard_floor_db, heard_db);
+        self.heard_floor_db = follow(self.heard_floor_db, heard_db, heard_catching);
         self.hop_energies[(self.frames % PERIOD_HOPS as u64) as usize] = newest_hop;
         self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
         let period_power =
@@ -108,7 +135,7 @@ impl Levels {
         let period_db = 10.0 * (period_power + 1e-12).log10() as f32;
         // Until a whole period is in, the floor is that of the hops so far.
         self.period_floor_db = if self.period_hops_seen == PERIOD_HOPS {
-            follow(self.period_floor_db, period_db)
+            follow(self.period_floor_db, period_db, period)
         } else {
             period_db
         };
@@ -135,6 +162,27 @@ mod tests {
     const HOP: usize = 64;
 
     #[test]
+    fn a_room_after_digital_silence_is_no_sound_within_a_fifth_of_a_second() {
+        // Noise at -30 dB after 0.5 s of zeros, muted for 0.5 s from 1.5 s.
+        let zeros = |s: f64| vec![0.0f32; (s * RATE) as usize];
+        let room = crate::detect::white_noise((2.0 * RATE) as usize, 0.03, 5);
+        let mut x = zeros(0.5);
+        x.extend_from_slice(&room);
+        let muted = (1.5 * RATE) as usize..(2.0 * RATE) as usize;
+        x[muted].fill(0.0);
+        let levels = levels_of(&x);
+        let frame = |s: f64| (s * RATE) as usize / HOP;
+        // The room's noise stands under twice its floor once the floors have caught
+        // up with it, after the zeros before it and after the mute.
+        for (from, to) in [(0.7, 1.5), (2.2, 2.5)] {
+            for l in &levels[frame(from)..frame(to) - WIN / HOP] {
+                assert_eq!(l.sound, SILENT_DB, "{from}-{to} s: {l:?}");
+                assert_eq!(l.rise, SILENT_DB, "{from}-{to} s: {l:?}");
+            }
+        }
+    }
+
+    #[test]
     fn the_period_hops_cover_a_period_of_50_hz_mains_and_less_than_a_hop_more() {
         let covered = PERIOD_HOPS as f64 * HOP_SECONDS;
         let period = 1.0 / 50.0;
@@ -154,7 +202,7 @@ mod tests {
                 let energy = |from: usize| x[from..end].iter().map(|&v| f64::from(v).powi(2)).sum();
                 let heard: f64 = energy(end - WIN);
                 let frame_db = 10.0 * (heard / WIN as f64 + 1e-12).log10() as f32;
-                levels.push(frame_db, heard, energy(end - HOP))
+                levels.push(frame_db, heard, energy(end - HOP), heard > 0.0)
             })
             .collect()
     }

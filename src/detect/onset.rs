@@ -17,6 +17,9 @@
 //! when it is a new sound: far louder than the previous one (`new_sound_db`) or rising
 //! far more steeply (`new_sound_rise_ratio`).
 //!
+//! Over digital silence the floors hold, and after it they catch up with the room
+//! (`docs/rooms.md`, "Digital silence").
+//!
 //! Because the function is a log ratio, its statistics on steady noise do not depend on
 //! the noise's level or colour: `floor_weight` and `threshold_db` are the pair that
 //! gives no false onset in a minute of steady white or red noise at any level, and a
@@ -91,6 +94,13 @@ impl Default for OnsetParams {
 /// of 16-bit audio).
 const MIN_BAND_POWER: f32 = 1e-10;
 
+/// Whether a frame's band powers hold any sound at all. A frame that holds none is
+/// digital silence (samples that are all zero, or were not numbers, made zero): no
+/// room is that quiet.
+pub(super) fn holds_sound(power: &[f32]) -> bool {
+    power.iter().any(|&p| p > MIN_BAND_POWER)
+}
+
 /// Each band's weight in the onset function: the square root of the number of
 /// spectral values it sums (`band_bins`, the effective count of its filter's bins),
 /// over the mean of those roots. On steady noise a band's log level wanders by about
@@ -147,6 +157,11 @@ pub struct OnsetDetector {
     /// The onset function at the last onset (where the current sound began); `None`
     /// once its sound has faded.
     unarmed_rise: Option<f32>,
+    /// Per band: the floor lies under the sound after digital silence, and rises to it
+    /// as fast as a floor falls, until a frame meets it.
+    catching_up: Vec<bool>,
+    /// The last frame was digital silence.
+    after_silence: bool,
 }
 
 impl OnsetDetector {
@@ -177,6 +192,8 @@ impl OnsetDetector {
             rearm_after_frames: (params.rearm_after_seconds / hop_seconds) as u64,
             peak: vec![0.0; bands],
             unarmed_rise: None,
+            catching_up: vec![false; bands],
+            after_silence: false,
             params,
         }
     }
@@ -201,6 +218,16 @@ impl OnsetDetector {
         let slots = (self.history.len() / bands.max(1)) as u64;
         let row = |g: u64| ((g % slots) as usize) * bands;
         let now = row(f);
+        // Digital silence says nothing about the room: the floors hold over it. After
+        // it, a floor under the first frame with sound starts from that frame (its
+        // window holds some of the silence still), and rises on to the sound as fast
+        // as it would fall, until the first frame at or under it: when the stream
+        // opened on digital silence, the room is reached within a fraction of a second
+        // instead of at the slow rise's pace, while a sound that begins there still
+        // rises out of the silence.
+        let sound = holds_sound(&power[..bands.min(power.len())]);
+        let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
+        let catch_up = 1.0 / self.floor_fall;
         for (b, &p) in power.iter().enumerate().take(bands) {
             let p = if p.is_finite() {
                 p.max(MIN_BAND_POWER)
@@ -208,11 +235,22 @@ impl OnsetDetector {
                 MIN_BAND_POWER
             };
             let fl = &mut self.floor[b];
-            *fl = if f == 0 {
-                p
+            let catching = &mut self.catching_up[b];
+            if f == 0 {
+                *fl = p;
+                *catching = !sound;
+            } else if !sound {
+                *catching = true;
             } else {
-                (*fl * self.floor_rise).min(p.max(*fl * self.floor_fall))
-            };
+                if resumed {
+                    *fl = fl.max(p);
+                }
+                let rise = if *catching { catch_up } else { self.floor_rise };
+                if !resumed && p <= *fl * rise {
+                    *catching = false;
+                }
+                *fl = (*fl * rise).min(p.max(*fl * self.floor_fall));
+            }
             self.history[now + b] = 10.0 * (p + self.params.floor_weight * *fl).log10();
         }
         // The mean over bands of each band's rise since `lag` frames ago, weighed.
@@ -395,6 +433,60 @@ mod tests {
             let found = onsets(&noise(10 * RATE as usize, amplitude, 3));
             assert!(found.len() <= 1, "{amplitude}: {found:?}");
         }
+    }
+
+    /// The band floors after each frame of `signal`.
+    fn floors(signal: &[f32]) -> Vec<Vec<f32>> {
+        let mut d = OnsetDetector::new(OnsetParams::default(), &[1.0; BANDS], WIN, HOP, RATE);
+        signal
+            .windows(WIN)
+            .step_by(HOP)
+            .map(|frame| {
+                d.push(&powers(frame));
+                d.band_floors().to_vec()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_floors_hold_over_digital_silence_and_catch_up_with_the_room_after_it() {
+        // Noise at -30 dB after 0.5 s of zeros, with hits; muted for 0.5 s.
+        let lead = (0.5 * RATE) as usize;
+        let times = [1.0, 1.5, 2.6];
+        let room = bursts(&times, 0.25, 0.03, 3.0);
+        let mut signal = vec![0.0; lead];
+        signal.extend_from_slice(&room);
+        let muted = lead + (2.0 * RATE) as usize..lead + (2.5 * RATE) as usize;
+        signal[muted].fill(0.0);
+        // Each hit is an onset; so may the room's beginning be (to the stage, a sound
+        // rising out of silence), but not its coming back after the mute.
+        let found = onsets(&signal);
+        let at_hits = found.iter().filter(|&&f| f > 0.6).collect::<Vec<_>>();
+        assert_eq!(at_hits.len(), times.len(), "{found:?}");
+        for (f, t) in at_hits.iter().zip(times) {
+            assert!((*f - 0.5 - t).abs() < 0.015, "onset {f} for {t} + 0.5");
+        }
+        assert!(found.len() <= times.len() + 1, "{found:?}");
+        // Within 0.2 s of the room's beginning the floors are those of the room heard
+        // from the start, and they hold while muted (within the 1.5 dB a floor may rise
+        // over the half second, and its wander).
+        let (with, without) = (floors(&signal), floors(&room));
+        let hops = |s: f64| (s * RATE) as usize / HOP;
+        for at in [0.2, 0.9, 1.9, 2.9] {
+            let (a, b) = (&with[hops(at + 0.5)], &without[hops(at)]);
+            for (x, y) in a.iter().zip(b) {
+                let db = 10.0 * (x / y).log10();
+                assert!(
+                    db.abs() < 2.0,
+                    "at {at} s: {db:.1} dB ({a:?} against {b:?})"
+                );
+            }
+        }
+        assert_eq!(
+            with[hops(2.1 + 0.5)],
+            with[hops(2.45 + 0.5)],
+            "held while muted"
+        );
     }
 
     #[test]

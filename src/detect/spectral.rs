@@ -92,7 +92,7 @@ use super::features::{
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
 use super::levels::{Levels, SILENT_DB};
-use super::onset::{Onset, OnsetDetector, OnsetParams};
+use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
@@ -1029,7 +1029,9 @@ impl SpectralMatcher {
                 hop_energy += e;
             }
         }
-        let frame_levels = self.level_stage.push(level, heard, hop_energy);
+        let frame_levels =
+            self.level_stage
+                .push(level, heard, hop_energy, holds_sound(&self.analyzer.power));
         self.levels[slot] = frame_levels.sound;
         self.rise_levels[slot] = frame_levels.rise;
 
