@@ -11,6 +11,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -28,10 +29,14 @@
 # (an input gain set too high).
 # silence: each sequence begins after SECONDS of digital silence (a recording exported
 # with silence before it, a microphone that delivers zeros until it starts), its truth
-# moved as far; the takes as they were. All repeatable (sox -R).
+# moved as far; the takes as they were.
+# trim: each sequence's first SECONDS cut, its truth moved as far earlier, the takes as
+# they were: the same sounds, falling elsewhere between the analysis' frames (a
+# fraction of a hop, 2.9 ms, tells how much of a set's figure is where its sounds
+# fall). All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,31p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,36p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -95,14 +100,20 @@ case $kind in
         [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
         added="every file at $gain_db dB, clipped at full scale"
         ;;
-    silence)
+    silence | trim)
         [ $# -eq 1 ] || usage
-        lead=$1
-        [[ $lead =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: silence $lead: expected seconds, such as 0.5" >&2; exit 2; }
+        seconds=$1
+        [[ $seconds =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: $kind $seconds: expected seconds, such as 0.5" >&2; exit 2; }
         which=sequences
-        added="the sequences after $lead s of digital silence, the takes as they were"
+        if [ "$kind" = silence ]; then
+            lead=$seconds
+            added="the sequences after $seconds s of digital silence, the takes as they were"
+        else
+            lead=-$seconds
+            added="the sequences' first $seconds s cut, the takes as they were"
+        fi
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain or silence" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence or trim" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -116,8 +127,9 @@ for set in "$src"/*/; do
     mkdir -p "$out/$name/patterns"
     cp "$set/set.json" "$out/$name/"
     for csv in "$set"/seq_*.csv; do
-        if [ "$kind" = silence ]; then
-            # Every time in the truth (onset_s, end_s) later by the silence.
+        if [ "$kind" = silence ] || [ "$kind" = trim ]; then
+            # Every time in the truth (onset_s, end_s) later by the silence (earlier by
+            # the cut).
             python3 - "$csv" "$out/$name/$(basename "$csv")" "$lead" <<'PY'
 import csv, sys
 src, dst, lead = sys.argv[1], sys.argv[2], float(sys.argv[3])
@@ -150,7 +162,9 @@ PY
         elif [ "$kind" = rate ]; then
             sox -R -V1 "$wav" -b 16 -r "$hz" "$out/$name/$rel"
         elif [ "$kind" = silence ]; then
-            sox -R -V1 "$wav" "$out/$name/$rel" pad "$lead" 0
+            sox -R -V1 "$wav" "$out/$name/$rel" pad "$seconds" 0
+        elif [ "$kind" = trim ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" trim "$seconds"
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)
