@@ -4,15 +4,17 @@
 # between the frames. A figure that holds on all four is not where the sounds happened
 # to fall; README, "Development sets".
 #
-#     bash scripts/phases.sh BINARY SETS_DIR [WORK_DIR]
+#     bash scripts/phases.sh BINARY SETS_DIR [WORK_DIR [ANALYZE_ARGS...]]
 #
 # SETS_DIR is made by ../shared/devsets/build.sh; the cut copies go into WORK_DIR
 # (default SETS_DIR-phases; made once, by scripts/room-sets.sh trim) and each is scored
-# by ../shared/devsets/run.sh with TAG=${TAG:-phases}. Prints each one's mean F1 and
-# speech line and, last, the mean F1 of the four.
+# by ../shared/devsets/run.sh with TAG=${TAG:-phases}, ANALYZE_ARGS passed on to
+# `onomato analyze` (such as --threshold 0.35). Prints each one's mean F1 and speech
+# line and, last, the mean F1 of the four.
 set -euo pipefail
-[ $# -ge 2 ] && [ $# -le 3 ] || { sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
+[ $# -ge 2 ] || { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2; }
 binary=$1 sets=${2%/} work=${3:-${2%/}-phases}
+shift $(($# < 3 ? $# : 3))
 here=$(cd "$(dirname "$0")" && pwd)
 run=$here/../../shared/devsets/run.sh
 [ -x "$binary" ] || { echo "phases.sh: $binary: no such executable (cargo build --release)" >&2; exit 1; }
@@ -29,7 +31,7 @@ for quarter in 1 2 3; do
 done
 total=0
 for folder in "${folders[@]}"; do
-    TAG=$tag bash "$run" "$binary" "$folder" > "$folder/run.$tag.txt" 2>&1 ||
+    TAG=$tag bash "$run" "$binary" "$folder" "$@" > "$folder/run.$tag.txt" 2>&1 ||
         { echo "phases.sh: run.sh failed on $folder (see $folder/run.$tag.txt)" >&2; exit 1; }
     mean=$(grep -E '^mean F1' "$folder/run.$tag.txt")
     echo "$(basename "$folder"): $mean | $(grep -E '^false events' "$folder/run.$tag.txt")"
