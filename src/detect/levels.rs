@@ -1,7 +1,7 @@
 //! The level stage: how far the sound of each frame stands out of the room's noise.
 //! Three floors follow the room, each as the onset stage's band floors do (towards a
-//! quieter frame quickly, upwards slowly; holding over digital silence, and catching
-//! up with the room after it): under the frame's level as the analyser gives it (the
+//! quieter frame quickly, upwards slowly, and after digital silence catching up with
+//! the room as fast as they fall): under the frame's level as the analyser gives it (the
 //! room's noise for placing an onset on the samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
@@ -96,8 +96,8 @@ impl Levels {
 
     /// The next frame: its level as the analyser gives it (dB), the energy of its
     /// samples as the bands hear them, and of its newest hop's; `sound`, whether it
-    /// holds any sound at all (`onset::holds_sound`): over digital silence the floors
-    /// hold, and after it they catch up with the room as the onset stage's do.
+    /// holds any sound at all (`onset::holds_sound`): after digital silence the floors
+    /// catch up with the room as the onset stage's do.
     pub(super) fn push(
         &mut self,
         frame_db: f32,
@@ -112,13 +112,11 @@ impl Levels {
             if first {
                 *catching = !sound;
                 level
-            } else if !sound {
-                *catching = true;
-                floor
             } else {
                 let floor = if resumed { floor.max(level) } else { floor };
-                let rise = if *catching { fall } else { rise };
-                if !resumed && level <= floor + rise {
+                *catching |= !sound;
+                let rise = if *catching && sound { fall } else { rise };
+                if sound && !resumed && level <= floor + rise {
                     *catching = false;
                 }
                 (floor + rise).min(level.max(floor - fall))

@@ -17,7 +17,7 @@
 //! when it is a new sound: far louder than the previous one (`new_sound_db`) or rising
 //! far more steeply (`new_sound_rise_ratio`).
 //!
-//! Over digital silence the floors hold, and after it they catch up with the room
+//! After digital silence the floors catch up with the room as fast as they fall
 //! (`docs/rooms.md`, "Digital silence").
 //!
 //! Because the function is a log ratio, its statistics on steady noise do not depend on
@@ -218,13 +218,13 @@ impl OnsetDetector {
         let slots = (self.history.len() / bands.max(1)) as u64;
         let row = |g: u64| ((g % slots) as usize) * bands;
         let now = row(f);
-        // Digital silence says nothing about the room: the floors hold over it. After
-        // it, a floor under the first frame with sound starts from that frame (its
-        // window holds some of the silence still), and rises on to the sound as fast
-        // as it would fall, until the first frame at or under it: when the stream
-        // opened on digital silence, the room is reached within a fraction of a second
-        // instead of at the slow rise's pace, while a sound that begins there still
-        // rises out of the silence.
+        // Over digital silence the floors fall as over any quieter frame (a gated
+        // input's room is that silence). After it, a floor under the first frame with
+        // sound starts from that frame (its window holds some of the silence still),
+        // and rises on to the sound as fast as it would fall, until the first frame at
+        // or under it: a room that begins (or comes back) after digital silence is
+        // reached within a fraction of a second instead of at the slow rise's pace,
+        // while a sound that begins there still rises out of the silence.
         let sound = holds_sound(&power[..bands.min(power.len())]);
         let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
         let catch_up = 1.0 / self.floor_fall;
@@ -239,14 +239,17 @@ impl OnsetDetector {
             if f == 0 {
                 *fl = p;
                 *catching = !sound;
-            } else if !sound {
-                *catching = true;
             } else {
                 if resumed {
                     *fl = fl.max(p);
                 }
-                let rise = if *catching { catch_up } else { self.floor_rise };
-                if !resumed && p <= *fl * rise {
+                *catching |= !sound;
+                let rise = if *catching && sound {
+                    catch_up
+                } else {
+                    self.floor_rise
+                };
+                if sound && !resumed && p <= *fl * rise {
                     *catching = false;
                 }
                 *fl = (*fl * rise).min(p.max(*fl * self.floor_fall));
@@ -449,7 +452,7 @@ mod tests {
     }
 
     #[test]
-    fn the_floors_hold_over_digital_silence_and_catch_up_with_the_room_after_it() {
+    fn the_floors_catch_up_with_the_room_after_digital_silence() {
         // Noise at -30 dB after 0.5 s of zeros, with hits; muted for 0.5 s.
         let lead = (0.5 * RATE) as usize;
         let times = [1.0, 1.5, 2.6];
@@ -458,18 +461,27 @@ mod tests {
         signal.extend_from_slice(&room);
         let muted = lead + (2.0 * RATE) as usize..lead + (2.5 * RATE) as usize;
         signal[muted].fill(0.0);
-        // Each hit is an onset; so may the room's beginning be (to the stage, a sound
-        // rising out of silence), but not its coming back after the mute.
+        // Each hit is an onset, where it is; so may the room's beginning and its coming
+        // back after the mute be (to the stage, a sound rising out of silence), but
+        // nothing else.
         let found = onsets(&signal);
-        let at_hits = found.iter().filter(|&&f| f > 0.6).collect::<Vec<_>>();
-        assert_eq!(at_hits.len(), times.len(), "{found:?}");
-        for (f, t) in at_hits.iter().zip(times) {
-            assert!((*f - 0.5 - t).abs() < 0.015, "onset {f} for {t} + 0.5");
+        for t in times {
+            assert!(
+                found.iter().any(|f| (f - 0.5 - t).abs() < 0.015),
+                "no onset for {t} + 0.5: {found:?}"
+            );
         }
-        assert!(found.len() <= times.len() + 1, "{found:?}");
-        // Within 0.2 s of the room's beginning the floors are those of the room heard
-        // from the start, and they hold while muted (within the 1.5 dB a floor may rise
-        // over the half second, and its wander).
+        let room_back = [0.5, 3.0];
+        assert!(
+            found
+                .iter()
+                .all(|f| times.iter().any(|t| (f - 0.5 - t).abs() < 0.015)
+                    || room_back.iter().any(|b| (f - b).abs() < 0.03)),
+            "{found:?}"
+        );
+        // Within 0.2 s of the room's beginning, and 0.4 s of its coming back, the
+        // floors are those of the room heard from the start (within 2 dB: a floor's
+        // wander).
         let (with, without) = (floors(&signal), floors(&room));
         let hops = |s: f64| (s * RATE) as usize / HOP;
         for at in [0.2, 0.9, 1.9, 2.9] {
@@ -482,11 +494,6 @@ mod tests {
                 );
             }
         }
-        assert_eq!(
-            with[hops(2.1 + 0.5)],
-            with[hops(2.45 + 0.5)],
-            "held while muted"
-        );
     }
 
     #[test]
