@@ -12,6 +12,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -33,10 +34,13 @@
 # trim: each sequence's first SECONDS cut, its truth moved as far earlier, the takes as
 # they were: the same sounds, falling elsewhere between the analysis' frames (a
 # fraction of a hop, 2.9 ms, tells how much of a set's figure is where its sounds
-# fall). All repeatable (sox -R).
+# fall).
+# head: each sequence cut SECONDS before its first annotated sound (a recording trimmed
+# to its first sound; 0.002 leaves 2 ms of room), its truth moved as far earlier, the
+# takes as they were. All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,36p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,40p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -100,7 +104,7 @@ case $kind in
         [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
         added="every file at $gain_db dB, clipped at full scale"
         ;;
-    silence | trim)
+    silence | trim | head)
         [ $# -eq 1 ] || usage
         seconds=$1
         [[ $seconds =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: $kind $seconds: expected seconds, such as 0.5" >&2; exit 2; }
@@ -108,12 +112,14 @@ case $kind in
         if [ "$kind" = silence ]; then
             lead=$seconds
             added="the sequences after $seconds s of digital silence, the takes as they were"
+        elif [ "$kind" = head ]; then
+            added="each sequence cut $seconds s before its first sound, the takes as they were"
         else
             lead=-$seconds
             added="the sequences' first $seconds s cut, the takes as they were"
         fi
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence or trim" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence, trim or head" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -127,19 +133,29 @@ for set in "$src"/*/; do
     mkdir -p "$out/$name/patterns"
     cp "$set/set.json" "$out/$name/"
     for csv in "$set"/seq_*.csv; do
-        if [ "$kind" = silence ] || [ "$kind" = trim ]; then
-            # Every time in the truth (onset_s, end_s) later by the silence (earlier by
-            # the cut).
-            python3 - "$csv" "$out/$name/$(basename "$csv")" "$lead" <<'PY'
+        if [ "$kind" = silence ] || [ "$kind" = trim ] || [ "$kind" = head ]; then
+            # Every time in the truth (onset_s, end_s) later by the silence, earlier by
+            # the cut; head cuts where the first sound begins less SECONDS, on a whole
+            # sample, and prints the samples cut (for sox).
+            rate=$(soxi -r "${csv%.csv}.wav" 2> /dev/null)
+            python3 - "$csv" "$out/$name/$(basename "$csv")" "$kind" "${lead:-$seconds}" "$rate" \
+                > "$tmp/$name-$(basename "$csv" .csv).cut" <<'PY'
 import csv, sys
-src, dst, lead = sys.argv[1], sys.argv[2], float(sys.argv[3])
+src, dst, kind, seconds, rate = sys.argv[1:3] + [sys.argv[3], float(sys.argv[4]), int(sys.argv[5])]
 with open(src, newline="") as f:
     reader = csv.DictReader(f)
     rows, fields = list(reader), reader.fieldnames
+if kind == "head":
+    first = min((float(r["onset_s"]) for r in rows), default=seconds)
+    cut = max(0, round((first - seconds) * rate))
+    shift = -cut / rate
+    print(cut)
+else:
+    shift = seconds
 for row in rows:
     for key in ("onset_s", "end_s"):
         if row.get(key):
-            row[key] = f"{float(row[key]) + lead:.4f}"
+            row[key] = f"{float(row[key]) + shift:.4f}"
 with open(dst, "w", newline="") as f:
     writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
     writer.writeheader()
@@ -165,6 +181,8 @@ PY
             sox -R -V1 "$wav" "$out/$name/$rel" pad "$seconds" 0
         elif [ "$kind" = trim ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" trim "$seconds"
+        elif [ "$kind" = head ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" trim "$(cat "$tmp/$name-$(basename "$wav" .wav).cut")s"
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)

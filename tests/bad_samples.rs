@@ -113,16 +113,6 @@ fn digital_silence_before_or_amid_a_noisy_room_costs_no_sound_after_it() {
                 e.time
             );
         }
-        eprintln!(
-            "LEAD {hops} {} of {}",
-            events
-                .iter()
-                .filter(|e| reference
-                    .iter()
-                    .any(|r| found(&events, r, shift) && r.pattern == e.pattern))
-                .count(),
-            reference.len()
-        );
         assert_eq!(events.len(), reference.len(), "{events:#?}");
     }
     // Zeros amid it (the microphone muted for a second): every sound from 0.3 s after

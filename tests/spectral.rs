@@ -1150,3 +1150,42 @@ fn an_instance_between_two_patterns_is_decided_over_two_windows() {
         "{found} of 8 named dull, {events} events, {waited} waited between two"
     );
 }
+
+/// A recording that begins with a sound: its room is known only from what follows.
+/// Regression test named after the failure: the floors started from the first frame,
+/// which held the sound, so the sound never rose out of them; a recording cut at its
+/// first sound lost it, and a take analysed alone gave no event.
+#[test]
+fn a_recording_that_begins_with_a_sound_finds_it() {
+    let settings = spectral();
+    let (rec, truth, _) = sequence((0.1, 0.7), 5);
+    let whole = detect(&settings, &rec, 256);
+    for t in &truth[..6] {
+        let at = (t.onset * f64::from(RATE)).round() as usize;
+        let events = detect(&settings, &rec[at..], 256);
+        let first = events.first().expect("no event");
+        assert!(
+            *first.pattern == *t.label && first.time < 0.005,
+            "cut at the {} of {:.3} s: {first:?}",
+            t.label,
+            t.onset
+        );
+        // The sounds after it are found as in the whole recording.
+        let later = |e: &&Event| e.time > t.onset + 0.3;
+        let after_cut = events.iter().filter(|e| e.time > 0.3).count();
+        assert_eq!(
+            whole.iter().filter(later).count(),
+            after_cut,
+            "cut at {:.3} s",
+            t.onset
+        );
+    }
+    // Each take alone, nothing before or after it.
+    for label in ["b", "ts", "k"] {
+        let events = detect(&settings, &maker(label)(1), 256);
+        assert!(
+            events.len() == 1 && &*events[0].pattern == label && events[0].time < 0.005,
+            "the {label} take alone: {events:?}"
+        );
+    }
+}

@@ -5,7 +5,9 @@
 //! room's noise for placing an onset on the samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
-//! the quiet-before rise and the spans of recognised sounds read). Runs on the
+//! the quiet-before rise and the spans of recognised sounds read). A stream's first
+//! frames are heard in the room that follows them, as in the onset stage
+//! ([`Levels::prime`]). Runs on the
 //! detector thread, inside the spectral matcher, once per frame; allocates nothing.
 
 use super::features::HOP_SECONDS;
@@ -49,6 +51,88 @@ pub(super) struct FrameLevels {
     pub(super) rise: f32,
 }
 
+/// What [`Levels::push`] takes of a frame, for [`Levels::prime`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LevelInput {
+    pub(super) frame_db: f32,
+    pub(super) heard: f64,
+    pub(super) newest_hop: f64,
+    pub(super) sound: bool,
+}
+
+/// Reads a stream's first frames ahead until it is known how the stream begins
+/// ([`Self::read`]): the floors of a stream that begins with a sound start from the room
+/// that follows it ([`Levels::prime`]), those of one that begins in its room from its
+/// first frame, as they always did. Whichever comes first decides, each frame's level
+/// compared with the first's by the rise an onset must make out of the quiet before it
+/// (`rise_db`):
+/// - a frame `rise_db` over every frame whose window ended before its own began, none
+///   `rise_db` under the first before: the stream began in its room, and a sound now
+///   rises out of it (a sound the stream begins with that swells is no such rise);
+/// - a frame `rise_db` under the first: the stream began with a sound. It goes on being
+///   read until a sound rises `rise_db` out of the quietest frame since (the room after
+///   the first sound has been heard), so that the floors start from the room itself;
+/// - the most frames it may read: a steady stream (a room, or a long sound), judged on
+///   all of them by [`Levels::prime`].
+///
+/// So a stream that begins in its room and soon holds a sound is read ahead no longer
+/// than until that sound rises, and its decisions are not delayed.
+pub(super) struct StreamStart {
+    rise_db: f32,
+    most: usize,
+    /// Frames per window: a frame's window overlaps the `window_frames - 1` before it.
+    window_frames: usize,
+    /// Each frame's level so far.
+    levels: Vec<f32>,
+    first_db: f32,
+    /// The loudest frame whose window ended before the newest frame's began.
+    loudest_db: f32,
+    /// The quietest frame after one `rise_db` under the first (index, dB), once there
+    /// has been one.
+    quietest: Option<(usize, f32)>,
+}
+
+impl StreamStart {
+    /// At most `most` frames, of `window_frames` hops each.
+    pub(super) fn new(rise_db: f32, most: usize, window_frames: usize) -> Self {
+        Self {
+            rise_db,
+            most: most.max(1),
+            window_frames: window_frames.max(1),
+            levels: Vec::with_capacity(most.max(1)),
+            first_db: 0.0,
+            loudest_db: f32::NEG_INFINITY,
+            quietest: None,
+        }
+    }
+
+    /// The next frame read ahead, its power as the bands hear it (dB); once it is known
+    /// how the stream begins, how many of the frames read the floors are to be primed
+    /// with (0: none, the stream began in its room).
+    pub(super) fn read(&mut self, heard_db: f32) -> Option<usize> {
+        let f = self.levels.len();
+        self.levels.push(heard_db);
+        if f == 0 {
+            self.first_db = heard_db;
+        }
+        if let Some(clear) = f.checked_sub(self.window_frames) {
+            self.loudest_db = self.loudest_db.max(self.levels[clear]);
+        }
+        match self.quietest {
+            None if f >= self.window_frames && heard_db >= self.loudest_db + self.rise_db => {
+                return Some(0)
+            }
+            None if heard_db <= self.first_db - self.rise_db => self.quietest = Some((f, heard_db)),
+            Some((_, quietest)) if heard_db >= quietest + self.rise_db => {
+                return self.quietest.map(|(q, _)| q + 1);
+            }
+            Some((_, quietest)) if heard_db < quietest => self.quietest = Some((f, heard_db)),
+            _ => {}
+        }
+        (self.levels.len() >= self.most).then_some(self.levels.len())
+    }
+}
+
 pub(super) struct Levels {
     /// Samples per hop and per frame.
     hop: usize,
@@ -72,6 +156,8 @@ pub(super) struct Levels {
     catching_up: [bool; 3],
     /// The last frame was digital silence.
     after_silence: bool,
+    /// The floors were set by [`Self::prime`].
+    primed: bool,
 }
 
 impl Levels {
@@ -91,7 +177,52 @@ impl Levels {
             period_hops_seen: 0,
             catching_up: [false; 3],
             after_silence: false,
+            primed: false,
         }
+    }
+
+    /// Whether a stream begins with a sound, from its first frames (before the first is
+    /// pushed): its first frame stands `rise_db` (the rise an onset must make out of
+    /// the quiet before it) over the room that follows it, the floor under the power
+    /// as the bands hear it read from the last frame back to the first by the rule that
+    /// makes it follow the room forwards. If it does, every floor starts from the room
+    /// so read (`OnsetDetector::prime` says why); if not, the stream begins in its room
+    /// and the floors start from its first frame, as they always did.
+    pub(super) fn prime(&mut self, frames: &[LevelInput], rise_db: f32) -> bool {
+        if !frames.first().is_some_and(|f| f.sound) {
+            return false;
+        }
+        let (rise, fall) = (self.rise_per_frame, self.fall_per_frame);
+        let back = |level: &dyn Fn(usize) -> f32| {
+            let last = frames.len() - 1;
+            (0..last).rev().fold(level(last), |floor, f| {
+                (floor + rise).min(level(f).max(floor - fall))
+            })
+        };
+        let win = self.win as f64;
+        let heard_floor_db = back(&|f| Self::power_db(frames[f].heard / win));
+        if Self::power_db(frames[0].heard / win) < heard_floor_db + rise_db {
+            return false;
+        }
+        self.heard_floor_db = heard_floor_db;
+        self.noise_floor_db = back(&|f| frames[f].frame_db);
+        let hop = self.hop;
+        self.period_floor_db = back(&|f| {
+            let hops = &frames[f.saturating_sub(PERIOD_HOPS - 1)..=f];
+            let energy: f64 = hops.iter().map(|h| h.newest_hop).sum();
+            Self::power_db(energy / (hops.len() * hop) as f64)
+        });
+        self.primed = true;
+        true
+    }
+
+    fn power_db(power: f64) -> f32 {
+        10.0 * (power + 1e-12).log10() as f32
+    }
+
+    /// A frame's power as the bands hear it, dB, from its energy `heard`.
+    pub(super) fn heard_db(&self, heard: f64) -> f32 {
+        Self::power_db(heard / self.win as f64)
     }
 
     /// The next frame: its level as the analyser gives it (dB), the energy of its
@@ -105,7 +236,7 @@ impl Levels {
         newest_hop: f64,
         sound: bool,
     ) -> FrameLevels {
-        let first = self.frames == 0;
+        let first = self.frames == 0 && !self.primed;
         let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
         let (rise, fall) = (self.rise_per_frame, self.fall_per_frame);
         let follow = |floor: f32, level: f32, catching: &mut bool| {
@@ -124,15 +255,16 @@ impl Levels {
         };
         let [noise, heard_catching, period] = &mut self.catching_up;
         self.noise_floor_db = follow(self.noise_floor_db, frame_db, noise);
-        let heard_db = 10.0 * (heard / self.win as f64 + 1e-12).log10() as f32;
+        let heard_db = Self::power_db(heard / self.win as f64);
         self.heard_floor_db = follow(self.heard_floor_db, heard_db, heard_catching);
         self.hop_energies[(self.frames % PERIOD_HOPS as u64) as usize] = newest_hop;
         self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
         let period_power =
             self.hop_energies.iter().sum::<f64>() / (self.period_hops_seen * self.hop) as f64;
-        let period_db = 10.0 * (period_power + 1e-12).log10() as f32;
-        // Until a whole period is in, the floor is that of the hops so far.
-        self.period_floor_db = if self.period_hops_seen == PERIOD_HOPS {
+        let period_db = Self::power_db(period_power);
+        // Until a whole period is in, the floor is that of the hops so far (unless the
+        // stream's start was read ahead).
+        self.period_floor_db = if self.period_hops_seen == PERIOD_HOPS || self.primed {
             follow(self.period_floor_db, period_db, period)
         } else {
             period_db
@@ -178,6 +310,88 @@ mod tests {
                 assert_eq!(l.rise, SILENT_DB, "{from}-{to} s: {l:?}");
             }
         }
+    }
+
+    /// What the level stage takes of each frame of `x`, as in [`levels_of`].
+    fn inputs_of(x: &[f32]) -> Vec<LevelInput> {
+        (WIN..=x.len())
+            .step_by(HOP)
+            .map(|end| {
+                let energy = |from: usize| x[from..end].iter().map(|&v| f64::from(v).powi(2)).sum();
+                let heard: f64 = energy(end - WIN);
+                LevelInput {
+                    frame_db: 10.0 * (heard / WIN as f64 + 1e-12).log10() as f32,
+                    heard,
+                    newest_hop: energy(end - HOP),
+                    sound: heard > 0.0,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_stream_that_begins_with_a_sound_is_told_from_one_that_begins_in_its_room() {
+        let n = |s: f64| (s * RATE) as usize;
+        let room = crate::detect::white_noise(n(0.5), 0.003, 5);
+        // A hit of 30 ms, 30 dB over the room, at the first sample.
+        let mut hit = room.clone();
+        for (k, x) in crate::detect::white_noise(n(0.03), 0.1, 6)
+            .iter()
+            .enumerate()
+        {
+            hit[k] += x;
+        }
+        let mut zeros_after = crate::detect::white_noise(n(0.03), 0.1, 6);
+        zeros_after.resize(n(0.5), 0.0);
+        let begins =
+            |x: &[f32]| Levels::new(WIN, HOP, &OnsetParams::default()).prime(&inputs_of(x), 10.0);
+        assert!(begins(&hit));
+        assert!(begins(&zeros_after));
+        assert!(!begins(&room));
+        assert!(!begins(&vec![0.0; n(0.5)]));
+        // Primed, the hit stands out of the room in the first frame.
+        let mut levels = Levels::new(WIN, HOP, &OnsetParams::default());
+        let inputs = inputs_of(&hit);
+        levels.prime(&inputs, 10.0);
+        let first = inputs[0];
+        let l = levels.push(first.frame_db, first.heard, first.newest_hop, first.sound);
+        assert!(l.sound > -25.0 && l.rise > -25.0, "{l:?}");
+        let mut unprimed = Levels::new(WIN, HOP, &OnsetParams::default());
+        let l = unprimed.push(first.frame_db, first.heard, first.newest_hop, first.sound);
+        assert_eq!(l.sound, SILENT_DB, "{l:?}");
+    }
+
+    /// The frames `StreamStart` reads of `levels` (dB, one a frame, windows of 4 hops)
+    /// before it knows how the stream begins, and what it then says.
+    fn stream_start(levels: &[f32]) -> (usize, Option<usize>) {
+        let mut start = StreamStart::new(10.0, 100, 4);
+        for (f, &l) in levels.iter().enumerate() {
+            if let Some(prime) = start.read(l) {
+                return (f + 1, Some(prime));
+            }
+        }
+        (levels.len(), None)
+    }
+
+    #[test]
+    fn how_a_stream_begins_is_known_as_soon_as_its_levels_tell() {
+        let room = [-60.0f32; 20];
+        // A room, then a sound that rises out of it over a window's frames: known at
+        // its first frame 10 dB over the room; nothing primed.
+        let mut x = room.to_vec();
+        x.extend([-57.0, -53.0, -49.0, -45.0, -30.0]);
+        assert_eq!(stream_start(&x), (23, Some(0)));
+        // A sound that swells from its first frame, 2 dB a frame: no frame stands 10
+        // dB over the frames whose windows ended before its own.
+        let swell: Vec<f32> = (0..8).map(|k| -40.0 + 2.0 * k as f32).collect();
+        assert_eq!(stream_start(&swell).1, None);
+        // A hit, its tail, the room, then another sound: the floors are primed with
+        // the frames up to the quietest before the second sound.
+        let mut x = vec![-20.0f32, -24.0, -32.0, -45.0, -58.0, -60.0, -61.0, -60.0];
+        x.extend([-55.0, -45.0]);
+        assert_eq!(stream_start(&x), (10, Some(7)));
+        // A steady stream: every frame it may read, then judged on all of them.
+        assert_eq!(stream_start(&[-60.0; 100]), (100, Some(100)));
     }
 
     #[test]

@@ -18,7 +18,9 @@
 //! far more steeply (`new_sound_rise_ratio`).
 //!
 //! After digital silence the floors catch up with the room as fast as they fall
-//! (`docs/rooms.md`, "Digital silence").
+//! (`docs/rooms.md`, "Digital silence"). A stream's first frames are heard in the room
+//! that follows them ([`OnsetDetector::prime`]; `docs/rooms.md`, "A stream that begins
+//! with a sound").
 //!
 //! Because the function is a log ratio, its statistics on steady noise do not depend on
 //! the noise's level or colour: `floor_weight` and `threshold_db` are the pair that
@@ -162,6 +164,11 @@ pub struct OnsetDetector {
     catching_up: Vec<bool>,
     /// The last frame was digital silence.
     after_silence: bool,
+    /// Per band: its floored log level before the stream, once [`Self::prime`] has
+    /// read the stream's first frames.
+    before_stream: Vec<f32>,
+    primed: bool,
+    read_ahead_frames: usize,
 }
 
 impl OnsetDetector {
@@ -194,8 +201,55 @@ impl OnsetDetector {
             unarmed_rise: None,
             catching_up: vec![false; bands],
             after_silence: false,
+            before_stream: vec![0.0; bands],
+            primed: false,
+            read_ahead_frames: Self::read_ahead_frames_at(&params, hop, rate),
             params,
         }
+    }
+
+    /// How many frames a stream's start is read ahead for [`Self::prime`]: a sound as
+    /// long as this stage takes any sound to last (`rearm_after_seconds`), and as long
+    /// of the room after it.
+    fn read_ahead_frames_at(params: &OnsetParams, hop: usize, rate: f64) -> usize {
+        (2.0 * params.rearm_after_seconds * rate / hop as f64).ceil() as usize
+    }
+
+    /// How many frames [`Self::prime`] reads.
+    pub fn read_ahead_frames(&self) -> usize {
+        self.read_ahead_frames
+    }
+
+    /// Sets the floors from the first frames of a stream that begins with a sound
+    /// (`powers`: their band powers, `bands` values a frame, in time order; at most
+    /// [`Self::read_ahead_frames`]), before the first is pushed. A floor that starts from
+    /// the first frame takes the sound for the room, and the sound never rises out of
+    /// it. Read from the last frame back to the first, by the rule that makes a floor
+    /// follow the room forwards, the floors reach the stream's start at the room that
+    /// follows the sound; before the stream each band was at its floor, and the onset
+    /// function 0 (`docs/rooms.md`, "A stream that begins with a sound").
+    pub fn prime(&mut self, powers: &[f32]) {
+        let bands = self.bands;
+        let frames = (powers.len() / bands.max(1)).min(self.read_ahead_frames);
+        if frames == 0 {
+            return;
+        }
+        let power = |f: usize, b: usize| {
+            let p = powers[f * bands + b];
+            if p.is_finite() {
+                p.max(MIN_BAND_POWER)
+            } else {
+                MIN_BAND_POWER
+            }
+        };
+        for b in 0..bands {
+            let fl = (0..frames - 1).rev().fold(power(frames - 1, b), |fl, f| {
+                (fl * self.floor_rise).min(power(f, b).max(fl * self.floor_fall))
+            });
+            self.floor[b] = fl;
+            self.before_stream[b] = 10.0 * ((1.0 + self.params.floor_weight) * fl).log10();
+        }
+        self.primed = true;
     }
 
     /// Per band: the noise floor (linear power, as the frames fed).
@@ -236,7 +290,7 @@ impl OnsetDetector {
             };
             let fl = &mut self.floor[b];
             let catching = &mut self.catching_up[b];
-            if f == 0 {
+            if f == 0 && !self.primed {
                 *fl = p;
                 *catching = !sound;
             } else {
@@ -257,15 +311,16 @@ impl OnsetDetector {
             self.history[now + b] = 10.0 * (p + self.params.floor_weight * *fl).log10();
         }
         // The mean over bands of each band's rise since `lag` frames ago, weighed.
+        // Before the stream, the bands' level there (once primed).
         let rise_since = |lag: u64| {
-            if lag == 0 || f < lag {
-                return 0.0;
-            }
-            let before = row(f - lag);
+            let before = match (lag == 0, f < lag, self.primed) {
+                (true, _, _) | (false, true, false) => return 0.0,
+                (false, true, true) => self.before_stream.as_slice(),
+                (false, false, _) => &self.history[row(f - lag)..row(f - lag) + bands],
+            };
             let mut rise = 0.0f32;
-            for b in 0..bands {
-                rise +=
-                    self.weight[b] * (self.history[now + b] - self.history[before + b]).max(0.0);
+            for (b, before) in before.iter().enumerate() {
+                rise += self.weight[b] * (self.history[now + b] - before).max(0.0);
             }
             rise / bands as f32
         };
@@ -274,8 +329,9 @@ impl OnsetDetector {
         let n = self.odf.len() as u64;
         self.odf[(f % n) as usize] = odf;
         self.slow_odf[(f % n) as usize] = slow_odf;
-        // The candidate is the frame before: a peak once the function falls again.
-        if f < 2 {
+        // The candidate is the frame before: a peak once the function falls again (the
+        // first frame too when the stream was primed: before it, the function was 0).
+        if f < 2 && !(f == 1 && self.primed) {
             return None;
         }
         let c = f - 1;
@@ -363,11 +419,18 @@ impl OnsetDetector {
         let n = odf.len() as u64;
         let at = |g: u64| odf[(g % n) as usize];
         let value = at(c);
-        if value <= at(c + 1) || value < at(c - 1) {
+        let previous = if c == 0 { 0.0 } else { at(c - 1) };
+        if value <= at(c + 1) || value < previous {
             return None;
         }
+        // Before a primed stream the function was 0: the room, no rise.
         let older = (self.mean_frames as u64).min(c);
-        let mean = (1..=older).map(|d| at(c - d)).sum::<f32>() / older.max(1) as f32;
+        let over = if self.primed {
+            self.mean_frames as u64
+        } else {
+            older
+        };
+        let mean = (1..=older).map(|d| at(c - d)).sum::<f32>() / over.max(1) as f32;
         (value >= mean + self.params.threshold_db).then_some(value)
     }
 }
@@ -428,6 +491,37 @@ mod tests {
             }
         }
         s
+    }
+
+    /// A hit at the stream's first sample, over a room 30 dB under it: the floors that
+    /// start from the first frame take the hit for the room and find no onset there;
+    /// primed with the frames that follow (where the room is), the stage finds it in
+    /// the first window, and no other onset.
+    #[test]
+    fn a_hit_the_stream_begins_with_is_an_onset_once_primed() {
+        let signal = bursts(&[0.0], 0.3, 0.01, 1.0);
+        let frames: Vec<[f32; BANDS]> = signal.windows(WIN).step_by(HOP).map(powers).collect();
+        let run = |prime: bool| {
+            let mut d = OnsetDetector::new(OnsetParams::default(), &[1.0; BANDS], WIN, HOP, RATE);
+            if prime {
+                let read: Vec<f32> = frames[..d.read_ahead_frames()].concat();
+                d.prime(&read);
+            }
+            frames
+                .iter()
+                .filter_map(|p| d.push(p))
+                .map(|o| o.frame)
+                .collect::<Vec<_>>()
+        };
+        let first_window = (WIN / HOP) as u64;
+        assert!(
+            run(false).iter().all(|&f| f > first_window),
+            "{:?}",
+            run(false)
+        );
+        let primed = run(true);
+        assert_eq!(primed.len(), 1, "{primed:?}");
+        assert!(primed[0] < first_window, "{primed:?}");
     }
 
     #[test]

@@ -91,7 +91,7 @@ use super::features::{
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
-use super::levels::{Levels, SILENT_DB};
+use super::levels::{LevelInput, Levels, StreamStart, SILENT_DB};
 use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
 use super::pitch::PitchEstimator;
@@ -299,8 +299,15 @@ pub struct SpectralMatcher {
     low_cut: LowCut,
     /// The same samples through `low_cut`, in a ring as long.
     heard_samples: Vec<f32>,
-    /// Samples consumed.
+    /// Samples received, and of them those the stages have consumed: all once it is
+    /// known how the stream begins ([`Self::read_ahead`]).
+    received: u64,
     consumed: u64,
+    stream_start: StreamStart,
+    primed: bool,
+    /// Of the frames read ahead: their band powers and what the level stage takes.
+    prime_powers: Vec<f32>,
+    prime_levels: Vec<LevelInput>,
     /// Samples since the last frame.
     since_frame: usize,
     /// Ring of log-mel frames, `BANDS` each.
@@ -731,7 +738,12 @@ impl SpectralMatcher {
             samples: vec![0.0; sample_capacity],
             low_cut: LowCut::new(rate),
             heard_samples: vec![0.0; sample_capacity],
+            received: 0,
             consumed: 0,
+            stream_start: StreamStart::new(0.0, 0, 1),
+            primed: false,
+            prime_powers: Vec::new(),
+            prime_levels: Vec::new(),
             since_frame: 0,
             frames: vec![0.0; frame_capacity * BANDS],
             levels: vec![SILENT_DB; frame_capacity],
@@ -817,6 +829,14 @@ impl SpectralMatcher {
                 .max(BETWEEN_TWO_WINDOWS);
         }
         matcher.compare_bands(bands);
+        let read_ahead_frames = matcher.onsets.read_ahead_frames();
+        matcher.stream_start = StreamStart::new(
+            matcher.gates.pre_quiet_db as f32,
+            read_ahead_frames,
+            matcher.analyzer.win.div_ceil(matcher.hop()),
+        );
+        matcher.prime_powers = Vec::with_capacity(read_ahead_frames * BANDS);
+        matcher.prime_levels = Vec::with_capacity(read_ahead_frames);
         matcher
     }
 
@@ -949,18 +969,91 @@ impl SpectralMatcher {
             return;
         }
         for &x in samples {
-            let slot = ring_slot(&self.samples, self.consumed);
+            let slot = ring_slot(&self.samples, self.received);
             self.samples[slot] = x;
             self.heard_samples[slot] = self.low_cut.run(x);
-            self.consumed += 1;
-            self.since_frame += 1;
-            if self.since_frame == self.hop() && self.consumed >= self.analyzer.win as u64 {
-                self.since_frame = 0;
-                self.compute_frame(out);
-            } else if self.since_frame == self.hop() {
-                self.since_frame = 0;
+            self.received += 1;
+            if self.primed {
+                self.advance(out);
+            } else {
+                self.read_ahead(out);
             }
         }
+    }
+
+    /// The stages take the next sample received: a frame every hop once a window's
+    /// samples have come.
+    fn advance(&mut self, out: &mut Vec<Event>) {
+        self.consumed += 1;
+        self.since_frame += 1;
+        if self.since_frame == self.hop() {
+            self.since_frame = 0;
+            if self.consumed >= self.analyzer.win as u64 {
+                self.compute_frame(out);
+            }
+        }
+    }
+
+    /// Reads the frame whose window ends at the sample just received ahead, until it is
+    /// known how the stream begins ([`StreamStart`]); then primes the floors of the
+    /// onset and level stages if it began with a sound ([`OnsetDetector::prime`]), and
+    /// lets the stages take the samples read. Their decisions come once they have been
+    /// read (`emitted_at`): this once, at most `read_ahead` after the stream's start.
+    fn read_ahead(&mut self, out: &mut Vec<Event>) {
+        let (win, hop) = (self.analyzer.win as u64, self.hop() as u64);
+        let end = self.received;
+        if end < win || end % hop != 0 {
+            return;
+        }
+        for (k, w) in self.window_buf.iter_mut().enumerate() {
+            *w = self.samples[ring_slot(&self.samples, end - win + k as u64)];
+        }
+        let frame_db = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
+        let (heard, newest_hop) = self.heard_energy(end);
+        self.prime_powers.extend_from_slice(&self.analyzer.power);
+        self.prime_levels.push(LevelInput {
+            frame_db,
+            heard,
+            newest_hop,
+            sound: holds_sound(&self.analyzer.power),
+        });
+        if let Some(frames) = self.stream_start.read(self.level_stage.heard_db(heard)) {
+            self.prime(frames, out);
+        }
+    }
+
+    /// Primes the floors with the first `frames` frames read ahead if the stream began
+    /// with a sound ([`Levels::prime`] tells), and lets the stages take every sample
+    /// received.
+    fn prime(&mut self, frames: usize, out: &mut Vec<Event>) {
+        let frames = frames.min(self.prime_levels.len());
+        if frames > 0
+            && self
+                .level_stage
+                .prime(&self.prime_levels[..frames], self.gates.pre_quiet_db)
+        {
+            self.onsets.prime(&self.prime_powers[..frames * BANDS]);
+        }
+        self.primed = true;
+        while self.consumed < self.received {
+            self.advance(out);
+        }
+    }
+
+    /// The energy of the frame whose window ends at sample `end`, as the bands hear it,
+    /// and of its newest hop.
+    fn heard_energy(&self, end: u64) -> (f64, f64) {
+        let start = end - self.analyzer.win as u64;
+        let newest_hop = end - self.hop() as u64;
+        let (mut heard, mut hop_energy) = (0.0f64, 0.0f64);
+        for n in start..end {
+            let e = f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2);
+            heard += e;
+            if n >= newest_hop {
+                hop_energy += e;
+            }
+        }
+        (heard, hop_energy)
     }
 
     /// Onsets detected but never classified because a bounded queue was full (onsets
@@ -974,20 +1067,24 @@ impl SpectralMatcher {
         if self.finished {
             return;
         }
-        // Enough silence for pending decisions and a held sound's end.
+        // Enough silence for pending decisions and a held sound's end (and, after a
+        // stream shorter than the read-ahead, its room: the samples end there).
         let pad =
             (self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 4)
                 * self.hop()
                 + self.analyzer.win
                 + (self.held.params().gap_seconds * self.rate) as usize
                 + self.copies.reach() as usize;
-        let end = self.consumed;
+        let end = self.received;
         const ZEROS: [f32; 256] = [0.0; 256];
         let mut left = pad;
         while left > 0 {
             let n = left.min(ZEROS.len());
             self.push(&ZEROS[..n], out);
             left -= n;
+        }
+        if !self.primed {
+            self.prime(self.prime_levels.len(), out);
         }
         if let Some(h) = self.held.end() {
             self.close_held(h, out);
@@ -1020,15 +1117,7 @@ impl SpectralMatcher {
         self.frames[slot * BANDS..(slot + 1) * BANDS].copy_from_slice(&self.frame_buf);
         self.frame_count += 1;
         // The frame's energy as the bands hear it, and its newest hop's.
-        let newest_hop = self.consumed - self.hop() as u64;
-        let (mut heard, mut hop_energy) = (0.0f64, 0.0f64);
-        for n in start..self.consumed {
-            let e = f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2);
-            heard += e;
-            if n >= newest_hop {
-                hop_energy += e;
-            }
-        }
+        let (heard, hop_energy) = self.heard_energy(self.consumed);
         let frame_levels =
             self.level_stage
                 .push(level, heard, hop_energy, holds_sound(&self.analyzer.power));
@@ -1106,7 +1195,7 @@ impl SpectralMatcher {
     fn explain_unscored(&mut self, time_sample: u64, outcome: Outcome) {
         let (time, decided_at) = (
             time_sample as f64 / self.rate,
-            self.consumed as f64 / self.rate,
+            self.received as f64 / self.rate,
         );
         if let Some(records) = &mut self.explain {
             records.push(OnsetRecord::unscored(time, decided_at, outcome));
@@ -1205,7 +1294,7 @@ impl SpectralMatcher {
             let name = |i: usize| self.patterns[i].name.clone();
             let record = OnsetRecord {
                 time: time_sample as f64 / self.rate,
-                decided_at: self.consumed as f64 / self.rate,
+                decided_at: self.received as f64 / self.rate,
                 best: Some(name(pi)),
                 best_score: Some(f64::from(best_score)),
                 second: second.map(|s| name(s.0)),
@@ -1326,7 +1415,7 @@ impl SpectralMatcher {
             end: None,
             strength,
             score: f64::from(score),
-            emitted_at: self.consumed as f64 / self.rate,
+            emitted_at: self.received as f64 / self.rate,
             pitch: None,
         }
     }
@@ -1951,7 +2040,7 @@ impl SpectralMatcher {
             end: Some(end_sample as f64 / self.rate),
             strength: (power / info.power.max(1e-12)).sqrt(),
             score: f64::from(h.score),
-            emitted_at: self.consumed as f64 / self.rate,
+            emitted_at: self.received as f64 / self.rate,
             pitch,
         });
     }
