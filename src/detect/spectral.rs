@@ -831,7 +831,7 @@ impl SpectralMatcher {
         matcher.compare_bands(bands);
         let read_ahead_frames = matcher.onsets.read_ahead_frames();
         matcher.stream_start = StreamStart::new(
-            matcher.gates.pre_quiet_db as f32,
+            matcher.gates.pre_quiet_db,
             read_ahead_frames,
             matcher.analyzer.win.div_ceil(matcher.hop()),
         );
@@ -998,7 +998,8 @@ impl SpectralMatcher {
     /// known how the stream begins ([`StreamStart`]); then primes the floors of the
     /// onset and level stages if it began with a sound ([`OnsetDetector::prime`]), and
     /// lets the stages take the samples read. Their decisions come once they have been
-    /// read (`emitted_at`): this once, at most `read_ahead` after the stream's start.
+    /// read (`emitted_at`): this once, at most the onset stage's read-ahead (0.5 s) after
+    /// the stream's start.
     fn read_ahead(&mut self, out: &mut Vec<Event>) {
         let (win, hop) = (self.analyzer.win as u64, self.hop() as u64);
         let end = self.received;
