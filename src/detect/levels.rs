@@ -5,10 +5,11 @@
 //! room's noise for placing an onset on the samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
-//! the quiet-before rise and the spans of recognised sounds read). A stream's first
-//! frames are heard in the room that follows them, as in the onset stage
-//! ([`Levels::prime`]). Runs on the
-//! detector thread, inside the spectral matcher, once per frame; allocates nothing.
+//! the quiet-before rise and the spans of recognised sounds read). It also tells how a
+//! stream begins ([`StreamStart`]): the floors of one that begins with a sound start
+//! from the room that follows it ([`Levels::prime`]), as the onset stage's do. Runs on
+//! the detector thread, inside the spectral matcher, once per frame; allocates nothing
+//! after `new`.
 
 use super::features::HOP_SECONDS;
 use super::onset::OnsetParams;
