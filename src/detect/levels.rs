@@ -67,9 +67,11 @@ pub(super) struct LevelInput {
 /// first frame, as they always did. Whichever comes first decides, each frame's level
 /// compared with the first's by the rise an onset must make out of the quiet before it
 /// (`rise_db`):
-/// - a frame `rise_db` over every frame whose window ended before its own began, none
-///   `rise_db` under the first before: the stream began in its room, and a sound now
-///   rises out of it (a sound the stream begins with that swells is no such rise);
+/// - a frame `rise_db` over every frame whose window ended before its own began, those
+///   frames spanning a window of their own, and none `rise_db` under the first before:
+///   the stream began in its room, heard for a window at least, and a sound now rises
+///   out of it (a sound the stream begins with, a few milliseconds in or swelling, is
+///   no such rise);
 /// - a frame `rise_db` under the first: the stream began with a sound. It goes on being
 ///   read until a sound rises `rise_db` out of the quietest frame since (the room after
 ///   the first sound has been heard), so that the floors start from the room itself;
@@ -120,7 +122,7 @@ impl StreamStart {
             self.loudest_db = self.loudest_db.max(self.levels[clear]);
         }
         match self.quietest {
-            None if f >= self.window_frames && heard_db >= self.loudest_db + self.rise_db => {
+            None if f >= 2 * self.window_frames && heard_db >= self.loudest_db + self.rise_db => {
                 return Some(0)
             }
             None if heard_db <= self.first_db - self.rise_db => self.quietest = Some((f, heard_db)),
