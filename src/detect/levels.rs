@@ -52,12 +52,15 @@ pub(super) struct FrameLevels {
     pub(super) rise: f32,
 }
 
-/// What [`Levels::push`] takes of a frame, for [`Levels::prime`].
+/// What the level stage takes of a frame ([`Levels::push`], [`Levels::prime`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct LevelInput {
+    /// Its level as the analyser gives it, dB.
     pub(super) frame_db: f32,
+    /// The energy of its samples as the bands hear them, and of its newest hop's.
     pub(super) heard: f64,
     pub(super) newest_hop: f64,
+    /// Whether it holds any sound at all (`onset::holds_sound`).
     pub(super) sound: bool,
 }
 
@@ -202,9 +205,8 @@ impl Levels {
                 (floor + rise).min(level(f).max(floor - fall))
             })
         };
-        let win = self.win as f64;
-        let heard_floor_db = back(&|f| Self::power_db(frames[f].heard / win));
-        if Self::power_db(frames[0].heard / win) < heard_floor_db + rise_db {
+        let heard_floor_db = back(&|f| self.heard_db(frames[f].heard));
+        if self.heard_db(frames[0].heard) < heard_floor_db + rise_db {
             return false;
         }
         self.heard_floor_db = heard_floor_db;
@@ -228,17 +230,16 @@ impl Levels {
         Self::power_db(heard / self.win as f64)
     }
 
-    /// The next frame: its level as the analyser gives it (dB), the energy of its
-    /// samples as the bands hear them, and of its newest hop's; `sound`, whether it
-    /// holds any sound at all (`onset::holds_sound`): after digital silence the floors
-    /// catch up with the room as the onset stage's do.
-    pub(super) fn push(
-        &mut self,
-        frame_db: f32,
-        heard: f64,
-        newest_hop: f64,
-        sound: bool,
-    ) -> FrameLevels {
+    /// The next frame. After digital silence (a frame without `sound`) the floors catch
+    /// up with the room as the onset stage's do.
+    pub(super) fn push(&mut self, frame: LevelInput) -> FrameLevels {
+        let LevelInput {
+            frame_db,
+            heard,
+            newest_hop,
+            sound,
+        } = frame;
+        let heard_db = self.heard_db(heard);
         let first = self.frames == 0 && !self.primed;
         let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
         let (rise, fall) = (self.rise_per_frame, self.fall_per_frame);
@@ -258,7 +259,6 @@ impl Levels {
         };
         let [noise, heard_catching, period] = &mut self.catching_up;
         self.noise_floor_db = follow(self.noise_floor_db, frame_db, noise);
-        let heard_db = Self::power_db(heard / self.win as f64);
         self.heard_floor_db = follow(self.heard_floor_db, heard_db, heard_catching);
         self.hop_energies[(self.frames % PERIOD_HOPS as u64) as usize] = newest_hop;
         self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
@@ -357,10 +357,10 @@ mod tests {
         let inputs = inputs_of(&hit);
         levels.prime(&inputs, 10.0);
         let first = inputs[0];
-        let l = levels.push(first.frame_db, first.heard, first.newest_hop, first.sound);
+        let l = levels.push(first);
         assert!(l.sound > -25.0 && l.rise > -25.0, "{l:?}");
         let mut unprimed = Levels::new(WIN, HOP, &OnsetParams::default());
-        let l = unprimed.push(first.frame_db, first.heard, first.newest_hop, first.sound);
+        let l = unprimed.push(first);
         assert_eq!(l.sound, SILENT_DB, "{l:?}");
     }
 
@@ -411,15 +411,7 @@ mod tests {
     /// analyser's level taken as the heard power's).
     fn levels_of(x: &[f32]) -> Vec<FrameLevels> {
         let mut levels = Levels::new(WIN, HOP, &OnsetParams::default());
-        (WIN..=x.len())
-            .step_by(HOP)
-            .map(|end| {
-                let energy = |from: usize| x[from..end].iter().map(|&v| f64::from(v).powi(2)).sum();
-                let heard: f64 = energy(end - WIN);
-                let frame_db = 10.0 * (heard / WIN as f64 + 1e-12).log10() as f32;
-                levels.push(frame_db, heard, energy(end - HOP), heard > 0.0)
-            })
-            .collect()
+        inputs_of(x).into_iter().map(|i| levels.push(i)).collect()
     }
 
     /// Mains hum as the bands hear it: the harmonics of 50 Hz, each as loud as a

@@ -1006,19 +1006,13 @@ impl SpectralMatcher {
         if end < win || end % hop != 0 {
             return;
         }
-        for (k, w) in self.window_buf.iter_mut().enumerate() {
-            *w = self.samples[ring_slot(&self.samples, end - win + k as u64)];
-        }
-        let frame_db = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
-        let (heard, newest_hop) = self.heard_energy(end);
+        let frame = self.analyse_frame(end);
         self.prime_powers.extend_from_slice(&self.analyzer.power);
-        self.prime_levels.push(LevelInput {
-            frame_db,
-            heard,
-            newest_hop,
-            sound: holds_sound(&self.analyzer.power),
-        });
-        if let Some(frames) = self.stream_start.read(self.level_stage.heard_db(heard)) {
+        self.prime_levels.push(frame);
+        if let Some(frames) = self
+            .stream_start
+            .read(self.level_stage.heard_db(frame.heard))
+        {
             self.prime(frames, out);
         }
     }
@@ -1041,20 +1035,31 @@ impl SpectralMatcher {
         }
     }
 
-    /// The energy of the frame whose window ends at sample `end`, as the bands hear it,
-    /// and of its newest hop.
-    fn heard_energy(&self, end: u64) -> (f64, f64) {
-        let start = end - self.analyzer.win as u64;
-        let newest_hop = end - self.hop() as u64;
-        let (mut heard, mut hop_energy) = (0.0f64, 0.0f64);
+    /// Analyses the frame whose window ends at sample `end`: its log-mel frame into
+    /// `frame_buf`, its band powers into the analyser's, and what the level stage takes
+    /// of it (its energy as the bands hear it, and its newest hop's).
+    fn analyse_frame(&mut self, end: u64) -> LevelInput {
+        let win = self.analyzer.win;
+        let start = end - win as u64;
+        for i in 0..win {
+            self.window_buf[i] = self.sample(start + i as u64);
+        }
+        let frame_db = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
+        let newest = end - self.hop() as u64;
+        let (mut heard, mut newest_hop) = (0.0f64, 0.0f64);
         for n in start..end {
             let e = f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2);
             heard += e;
-            if n >= newest_hop {
-                hop_energy += e;
+            if n >= newest {
+                newest_hop += e;
             }
         }
-        (heard, hop_energy)
+        LevelInput {
+            frame_db,
+            heard,
+            newest_hop,
+            sound: holds_sound(&self.analyzer.power),
+        }
     }
 
     /// Onsets detected but never classified because a bounded queue was full (onsets
@@ -1106,22 +1111,13 @@ impl SpectralMatcher {
     }
 
     fn compute_frame(&mut self, out: &mut Vec<Event>) {
-        let win = self.analyzer.win;
-        let start = self.consumed - win as u64;
-        for i in 0..win {
-            self.window_buf[i] = self.sample(start + i as u64);
-        }
-        let level = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
+        let level_input = self.analyse_frame(self.consumed);
         self.passband.push(&self.analyzer.power);
         let f = self.frame_count;
         let slot = (f % self.frame_capacity as u64) as usize;
         self.frames[slot * BANDS..(slot + 1) * BANDS].copy_from_slice(&self.frame_buf);
         self.frame_count += 1;
-        // The frame's energy as the bands hear it, and its newest hop's.
-        let (heard, hop_energy) = self.heard_energy(self.consumed);
-        let frame_levels =
-            self.level_stage
-                .push(level, heard, hop_energy, holds_sound(&self.analyzer.power));
+        let frame_levels = self.level_stage.push(level_input);
         self.levels[slot] = frame_levels.sound;
         self.rise_levels[slot] = frame_levels.rise;
 
