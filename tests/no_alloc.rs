@@ -118,6 +118,30 @@ fn processing_blocks_allocates_nothing_at_the_working_rate() {
     check(Method::Spectral, RATE, 256);
 }
 
+/// The stream's first frames are read ahead, and its floors primed from them, when it
+/// begins with a sound: that too allocates nothing, counted from the first block.
+#[test]
+fn a_stream_that_begins_with_a_sound_allocates_nothing_from_its_first_block() {
+    let (settings, patterns) = patterns_for(Method::Spectral);
+    let rec = scene();
+    let rec = &rec[samples_for(0.3, RATE)..];
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let mut events: Vec<Event> = Vec::with_capacity(256);
+    let n = allocations_in(|| {
+        for chunk in rec.chunks(256) {
+            det.process(chunk, &mut events);
+        }
+    });
+    assert_eq!(n, 0, "{n} allocations from the stream's first block");
+    det.finish(&mut events);
+    let first = events.first().expect("no event");
+    assert!(
+        first.time < 0.005,
+        "the first sound was not found: {first:?}"
+    );
+    assert_eq!(events.iter().filter(|e| e.end.is_none()).count(), 18);
+}
+
 #[test]
 fn processing_blocks_allocates_nothing_through_the_resampler() {
     check(Method::Waveform, 48_000, 480);
