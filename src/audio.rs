@@ -33,7 +33,7 @@ pub enum AudioError {
     },
     #[error("'{}' is not a readable WAV file: {reason}", path.display())]
     NotWav { path: PathBuf, reason: String },
-    #[error("'{}' has an unsupported sample format: {found}; expected 8, 16, 24 or 32-bit integer or 32-bit float PCM", path.display())]
+    #[error("'{}' has an unsupported sample format: {found}; {}", path.display(), PCM_FORMATS)]
     Format { path: PathBuf, found: String },
     #[error("'{}' has {channels} channel(s); channel {wanted} does not exist (channels are counted from 0)", path.display())]
     Channel {
@@ -78,9 +78,25 @@ fn hound_reason(err: hound::Error) -> String {
         {
             "the file ends before its header says it should (truncated?)".to_string()
         }
+        // hound names these by what its parser missed; say what the file holds instead.
+        hound::Error::FormatError("no RIFF tag found") => {
+            "it has no RIFF header, so it is not a WAV file (convert FLAC, AIFF, MP3 and \
+             others to WAV first, e.g. `sox IN.flac OUT.wav`)"
+                .to_string()
+        }
+        hound::Error::FormatError("bits per sample is not 32") => format!(
+            "its samples are floating point but not 32-bit (64-bit?); {PCM_FORMATS} \
+             (`sox IN.wav -b 32 OUT.wav` converts it)"
+        ),
+        hound::Error::Unsupported => format!(
+            "its samples are not PCM (mu-law, A-law or a compressed encoding?); {PCM_FORMATS}"
+        ),
         other => other.to_string(),
     }
 }
+
+/// The sample formats a WAV file may hold.
+const PCM_FORMATS: &str = "expected 8, 16, 24 or 32-bit integer or 32-bit float PCM";
 
 impl WavSource {
     /// Opens `path` and checks its format and the chosen channel.

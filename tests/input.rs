@@ -147,6 +147,28 @@ fn load_error(dir: &Path, file: &str, settings: &DetectorSettings) -> String {
     }
 }
 
+/// A mono WAV of 100 zero frames whose fmt chunk declares `format_tag` (1 PCM, 3 float,
+/// 7 mu-law) at `bits` per sample.
+fn wav_header(format_tag: u16, bits: u16) -> Vec<u8> {
+    let block = bits / 8;
+    let data = 100 * u32::from(block);
+    let mut b = Vec::new();
+    b.extend_from_slice(b"RIFF");
+    b.extend_from_slice(&(36 + data).to_le_bytes());
+    b.extend_from_slice(b"WAVEfmt ");
+    b.extend_from_slice(&16u32.to_le_bytes());
+    b.extend_from_slice(&format_tag.to_le_bytes());
+    b.extend_from_slice(&1u16.to_le_bytes());
+    b.extend_from_slice(&RATE.to_le_bytes());
+    b.extend_from_slice(&(RATE * u32::from(block)).to_le_bytes());
+    b.extend_from_slice(&block.to_le_bytes());
+    b.extend_from_slice(&bits.to_le_bytes());
+    b.extend_from_slice(b"data");
+    b.extend_from_slice(&data.to_le_bytes());
+    b.resize(b.len() + data as usize, 0);
+    b
+}
+
 #[test]
 fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     let dir = temp_dir("bad-patterns");
@@ -182,6 +204,25 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     );
     // The frame named is where the data stops, not the start of the block.
     assert!(!msg.contains("reading frame 0 "), "{msg}");
+
+    // Headers of sample formats the WAV reader does not take: each says what it holds.
+    std::fs::write(dir.join("double.wav"), wav_header(3, 64)).unwrap();
+    let msg = load_error(&dir, "double.wav", &settings);
+    assert!(
+        msg.contains("floating point but not 32-bit") && msg.contains("32-bit float PCM"),
+        "{msg}"
+    );
+    std::fs::write(dir.join("mulaw.wav"), wav_header(7, 8)).unwrap();
+    let msg = load_error(&dir, "mulaw.wav", &settings);
+    assert!(msg.contains("not PCM (mu-law"), "{msg}");
+    let mut flac = b"fLaC".to_vec();
+    flac.extend_from_slice(&[0u8; 64]);
+    std::fs::write(dir.join("take.flac"), flac).unwrap();
+    let msg = load_error(&dir, "take.flac", &settings);
+    assert!(
+        msg.contains("take.flac") && msg.contains("not a WAV file"),
+        "{msg}"
+    );
 
     write_wav_f32(&dir.join("silent.wav"), &vec![0.0; 4410], RATE);
     let msg = load_error(&dir, "silent.wav", &settings);
