@@ -13,6 +13,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR gate OVER_DB [HOLD_SECONDS]
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
@@ -37,7 +38,14 @@
 # fall).
 # head: each sequence cut SECONDS before its first annotated sound (a recording trimmed
 # to its first sound; 0.002 leaves 2 ms of room), its truth moved as far earlier, the
-# takes as they were. All repeatable (sox -R).
+# takes as they were.
+# gate: a noise gate on every file, as a live performer or a streamer sets one before
+# the detector: in 5 ms blocks, open from the first block whose RMS stands OVER_DB over
+# the set's room (the 10th percentile block of its sequences, digital silence left out;
+# the takes go through the same gate) until HOLD_SECONDS (default 0.1) after the last
+# such block, digital silence while closed; no look-ahead, so a sound's soft start under
+# the threshold is cut, as a gate cuts it.
+# All repeatable (sox -R).
 set -euo pipefail
 usage() {
     sed -n '2,40p' "$0" | sed 's/^# \{0,1\}//' >&2
@@ -119,7 +127,14 @@ case $kind in
             added="the sequences' first $seconds s cut, the takes as they were"
         fi
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence, trim or head" >&2; exit 2 ;;
+    gate)
+        [ $# -ge 1 ] && [ $# -le 2 ] || usage
+        over_db=$1 hold=${2:-0.1}
+        [[ $over_db =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db: expected decibels over the room, such as 10" >&2; exit 2; }
+        [[ $hold =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db $hold: expected the hold in seconds, such as 0.1" >&2; exit 2; }
+        added="every file through a noise gate $over_db dB over its room, held $hold s"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence, trim, head or gate" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -165,6 +180,30 @@ PY
             cp "$csv" "$out/$name/"
         fi
     done
+    if [ "$kind" = gate ]; then
+        # The set's room: the 10th percentile of its sequences' 5 ms blocks.
+        for wav in "$set"/seq_*.wav; do
+            sox -R -V1 "$wav" -t f32 -c 1 "$tmp/$(basename "$wav" .wav).f32"
+            soxi -r "$wav" 2> /dev/null > "$tmp/$(basename "$wav" .wav).rate"
+        done
+        threshold_db=$(python3 - "$over_db" "$tmp" <<'PY'
+import array, glob, math, sys
+levels = []
+for raw in glob.glob(sys.argv[2] + "/seq_*.f32"):
+    x = array.array("f")
+    with open(raw, "rb") as f:
+        x.frombytes(f.read())
+    block = max(1, round(0.005 * int(open(raw[:-4] + ".rate").read())))
+    for at in range(0, len(x), block):
+        power = sum(v * v for v in x[at:at + block]) / len(x[at:at + block])
+        if power > 0:
+            levels.append(10 * math.log10(power))
+levels.sort()
+print(f"{levels[len(levels) // 10] + float(sys.argv[1]):.2f}" if levels else "0")
+PY
+)
+        rm -f "$tmp"/seq_*.f32 "$tmp"/seq_*.rate
+    fi
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
         if [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
@@ -183,6 +222,35 @@ PY
             sox -R -V1 "$wav" "$out/$name/$rel" trim "$seconds"
         elif [ "$kind" = head ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" trim "$(cat "$tmp/$name-$(basename "$wav" .wav).cut")s"
+        elif [ "$kind" = gate ]; then
+            # The samples as raw 32-bit floats through the gate, written back in the
+            # file's own encoding.
+            rate=$(soxi -r "$wav" 2> /dev/null)
+            sox -R -V1 "$wav" -t f32 -c 1 "$tmp/in.f32"
+            python3 - "$tmp/in.f32" "$tmp/out.f32" "$rate" "$threshold_db" "$hold" <<'PY'
+import array, math, sys
+src, dst, rate, threshold_db, hold = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
+x = array.array("f")
+with open(src, "rb") as f:
+    x.frombytes(f.read())
+block = max(1, round(0.005 * rate))
+hold_blocks = round(hold / 0.005)
+left = 0
+for at in range(0, len(x), block):
+    chunk = x[at:at + block]
+    power = sum(v * v for v in chunk) / len(chunk)
+    if power > 0 and 10 * math.log10(power) >= threshold_db:
+        left = hold_blocks + 1
+    if left == 0:
+        x[at:at + block] = array.array("f", bytes(4 * len(chunk)))
+    else:
+        left -= 1
+with open(dst, "wb") as f:
+    x.tofile(f)
+PY
+            sox -R -V1 -t f32 -r "$rate" -c 1 "$tmp/out.f32" \
+                -e "$(soxi -e "$wav" 2> /dev/null | sed 's/ .*//; s/Signed/signed-integer/; s/Floating/floating-point/')" \
+                -b "$(soxi -b "$wav" 2> /dev/null)" "$out/$name/$rel"
         else
             seconds=$(soxi -D "$wav" 2> /dev/null)
             rate=$(soxi -r "$wav" 2> /dev/null)

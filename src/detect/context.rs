@@ -24,6 +24,7 @@
 //! allocates nothing.
 
 use super::held::SOUND_DROP_DB;
+use super::levels::SILENT_DB;
 
 /// The context stage's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -323,11 +324,16 @@ impl Context {
     /// sound's `peak_db` that no recognised sound covers. A frame is judged by the
     /// sample at its centre. Stopped sounds near speech count ([`Context::stopped`]), but
     /// when the guard closes only with them it says so, and what it stops then covers
-    /// its span again: a stop passes on once at most.
+    /// its span again: a stop passes on once at most. A frame with no sound over the room
+    /// (`SILENT_DB`: digital silence, a closed noise gate) is no sound, however little
+    /// the new one stands over its own floor.
     pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
         let (mut unrecognised, mut near_speech) = (0, 0);
         for (centre, level) in frames {
-            if level < peak_db - self.params.guard_db || self.recognised_at(centre) {
+            if level <= SILENT_DB
+                || level < peak_db - self.params.guard_db
+                || self.recognised_at(centre)
+            {
                 continue;
             }
             if self.near_speech_at(centre) {
@@ -382,6 +388,17 @@ mod tests {
         let c = context();
         assert!(closed(&c, frames(0, 200, -25.0), -20.0));
         assert!(!closed(&c, frames(0, 199, -25.0), -20.0));
+    }
+
+    /// Digital silence before a sound that stands next to nothing over its room (the
+    /// level stage has just caught up with it) is no sound, though it lies within
+    /// `guard_db` of that sound's peak.
+    #[test]
+    fn digital_silence_is_no_sound_to_the_guard() {
+        let c = context();
+        assert!(!closed(&c, frames(0, 650, SILENT_DB), SILENT_DB));
+        assert!(!closed(&c, frames(0, 650, SILENT_DB), SILENT_DB + 5.0));
+        assert!(closed(&c, frames(0, 200, SILENT_DB + 1.0), SILENT_DB + 5.0));
     }
 
     #[test]
