@@ -10,6 +10,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR dc OFFSET
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
@@ -29,6 +30,8 @@
 # resampled to a full rate on its way in); `sequences` as for rate.
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
 # (an input gain set too high).
+# dc: every file OFFSET (of full scale) higher, 16-bit or as it was: a microphone's or
+# a converter's DC offset; what passes full scale clips.
 # silence: each sequence begins after SECONDS of digital silence (a recording exported
 # with silence before it, a microphone that delivers zeros until it starts), its truth
 # moved as far; the takes as they were.
@@ -112,6 +115,12 @@ case $kind in
         [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
         added="every file at $gain_db dB, clipped at full scale"
         ;;
+    dc)
+        [ $# -eq 1 ] || usage
+        offset=$1
+        [[ $offset =~ ^-?0?\.[0-9]+$ ]] || { echo "room-sets.sh: dc $offset: expected a fraction of full scale, such as 0.01" >&2; exit 2; }
+        added="every file $offset of full scale higher (a DC offset)"
+        ;;
     silence | trim | head)
         [ $# -eq 1 ] || usage
         seconds=$1
@@ -134,7 +143,7 @@ case $kind in
         [[ $hold =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db $hold: expected the hold in seconds, such as 0.1" >&2; exit 2; }
         added="every file through a noise gate $over_db dB over its room, held $hold s"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, silence, trim, head or gate" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, dc, silence, trim, head or gate" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -210,6 +219,8 @@ PY
             cp "$wav" "$out/$name/$rel"
         elif [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
+        elif [ "$kind" = dc ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" dcshift "$offset"
         elif [ "$kind" = gain ]; then
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" gain "$gain_db"
         elif [ "$kind" = lowpass ]; then

@@ -132,6 +132,38 @@ fn digital_silence_before_or_amid_a_noisy_room_costs_no_sound_after_it() {
     }
 }
 
+/// A microphone's or a converter's DC offset is no sound: the bundled example 0.05
+/// over (26 dB under full scale) gives the events it gives without. Before the offset
+/// was taken away, its strengths grew with the offset's power (a "pop" 0.97 of its
+/// take's level, 3.25 with it), a "boom" and a held "hoo" were lost under the lowest
+/// band's leakage, and the step out of the offset when the stream ended fired a "hoo".
+#[test]
+fn a_dc_offset_changes_no_event() {
+    let (config, clean, working_rate) = example();
+    // At the working rate, and at 48 kHz, where the resampler too pads the stream's end.
+    for rate in [working_rate, 48_000] {
+        let clean = onomato::audio::resample_clip(&clean, working_rate, rate).unwrap();
+        let (reference, _) = detect(&config, &clean, rate);
+        for offset in [0.01f32, 0.05] {
+            let shifted: Vec<f32> = clean.iter().map(|x| x + offset).collect();
+            let (events, _) = detect(&config, &shifted, rate);
+            assert_eq!(
+                events.len(),
+                reference.len(),
+                "offset {offset} at {rate} Hz: {events:#?}"
+            );
+            for (e, r) in events.iter().zip(&reference) {
+                assert!(
+                    e.pattern == r.pattern
+                        && (e.time - r.time).abs() < 0.001
+                        && (e.strength / r.strength - 1.0).abs() < 0.02,
+                    "offset {offset} at {rate} Hz: {e:?} where {r:?}"
+                );
+            }
+        }
+    }
+}
+
 /// A noise gate, as a live performer or a streamer sets one before the detector: in 5
 /// ms blocks, open from a block whose RMS stands 10 dB over the room (its 10th
 /// percentile block) until 0.1 s after the last such block, zeros while closed.

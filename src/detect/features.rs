@@ -77,6 +77,40 @@ impl LowCut {
     }
 }
 
+/// Cutoff of [`DcBlock`]: far enough under the bands' low edge (`LOW_HZ`) that they hear
+/// no difference (0.02 dB at 80 Hz), and under the 20 Hz where hearing ends.
+const DC_BLOCK_HZ: f64 = 5.0;
+
+/// A DC blocker (one pole, one zero at DC; `DC_BLOCK_HZ`): a microphone's or a
+/// converter's offset is no sound, but a window's leakage puts it in the lowest band,
+/// its power in every strength and level, and a stream that stops (the zeros after
+/// its end) steps out of it. The takes have their mean taken away when they are
+/// enrolled; the stream has this. Starts from silence, so a stream without an offset
+/// is its own samples from the first; one sample at a time, allocating nothing.
+#[derive(Clone)]
+pub(super) struct DcBlock {
+    pole: f32,
+    last_in: f32,
+    last_out: f32,
+}
+
+impl DcBlock {
+    pub(super) fn new(rate: f64) -> Self {
+        Self {
+            pole: (-2.0 * std::f64::consts::PI * DC_BLOCK_HZ / rate).exp() as f32,
+            last_in: 0.0,
+            last_out: 0.0,
+        }
+    }
+
+    pub(super) fn run(&mut self, x: f32) -> f32 {
+        let y = x - self.last_in + self.pole * self.last_out;
+        self.last_in = x;
+        self.last_out = y;
+        y
+    }
+}
+
 /// Bands are floored this far below the frame's loudest band.
 const BAND_RANGE_DB: f32 = 60.0;
 
@@ -472,6 +506,37 @@ mod tests {
         let mut low_cut = LowCut::new(rate);
         let last = (0..rate as usize).fold(0.0, |_, _| low_cut.run(0.5));
         assert!(last.abs() < 1e-4, "{last}");
+    }
+
+    #[test]
+    fn the_dc_blocker_takes_an_offset_away_and_leaves_what_the_bands_hear() {
+        let rate = 22_050.0;
+        let gain_db = |hz: f64| {
+            let mut dc = DcBlock::new(rate);
+            let (mut input, mut output) = (0.0f64, 0.0f64);
+            for n in 0..(2.0 * rate) as usize {
+                let x = (2.0 * std::f64::consts::PI * hz * n as f64 / rate).sin() as f32;
+                let y = dc.run(x);
+                if n as f64 >= rate {
+                    input += f64::from(x).powi(2);
+                    output += f64::from(y).powi(2);
+                }
+            }
+            10.0 * (output / input).log10()
+        };
+        // One pole: -3 dB at its cutoff, the bands' lowest frequency within 0.02 dB.
+        assert!(
+            (gain_db(DC_BLOCK_HZ) + 3.0).abs() < 0.1,
+            "{}",
+            gain_db(DC_BLOCK_HZ)
+        );
+        assert!(gain_db(LOW_HZ) > -0.02, "{}", gain_db(LOW_HZ));
+        // An offset is gone within a fifth of a second, and silence stays silence.
+        let mut dc = DcBlock::new(rate);
+        let settled = (0..(0.2 * rate) as usize).fold(0.0, |_, _| dc.run(0.05));
+        assert!(settled.abs() < 0.05 * 0.01, "{settled}");
+        let mut dc = DcBlock::new(rate);
+        assert!((0..1000).all(|_| dc.run(0.0) == 0.0));
     }
 
     /// The features of `k` frames.

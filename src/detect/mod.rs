@@ -237,6 +237,10 @@ pub struct Detector {
     bad_samples: u64,
     /// Samples at full scale, or clamped to it ([`crate::audio::CLIP_LEVEL`]).
     clipped_samples: u64,
+    /// The spectral method's: the input's offset taken away ([`features::DcBlock`]), at
+    /// the input rate, before the resampler and the stream's end pad it with silence.
+    /// The waveform method correlates the samples as they are, as the paper does.
+    dc_block: Option<features::DcBlock>,
 }
 
 /// Samples are taken in pieces of this many to be sanitised.
@@ -269,6 +273,8 @@ impl Detector {
                 Matcher::Spectral(Box::new(matcher))
             }
         };
+        let dc_block = (settings.method == Method::Spectral)
+            .then(|| features::DcBlock::new(f64::from(input_rate)));
         let resampler = if input_rate == settings.sample_rate {
             None
         } else {
@@ -286,6 +292,7 @@ impl Detector {
             clean: vec![0.0; CLEAN_BLOCK],
             bad_samples: 0,
             clipped_samples: 0,
+            dc_block,
         })
     }
 
@@ -415,7 +422,8 @@ impl Detector {
     /// Consumes one block of mono input and appends the events decided meanwhile.
     /// Samples that are not finite become 0 and samples beyond full scale are clamped
     /// to ±1 before anything else sees them: no state of the detector (resampler,
-    /// noise floors, onset function) can be captured by a corrupt burst.
+    /// noise floors, onset function) can be captured by a corrupt burst. Then the
+    /// spectral method takes the input's offset away.
     pub fn process(&mut self, block: &[f32], out: &mut Vec<Event>) {
         let first = out.len();
         self.input_consumed += block.len() as u64;
@@ -426,6 +434,7 @@ impl Detector {
             clean,
             bad_samples,
             clipped_samples,
+            dc_block,
             ..
         } = self;
         for piece in block.chunks(CLEAN_BLOCK) {
@@ -441,6 +450,9 @@ impl Detector {
                 }
                 if c.abs() >= crate::audio::CLIP_LEVEL {
                     *clipped_samples += 1;
+                }
+                if let Some(dc) = dc_block {
+                    *c = dc.run(*c);
                 }
             }
             match resampler {
