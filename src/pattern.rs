@@ -10,8 +10,10 @@ use std::sync::Arc;
 use crate::audio::{self, AudioError, ChannelSelect, WavSource};
 use crate::config::{DetectorSettings, Method, PatternKind, PatternSpec};
 
-/// A take quieter than this (peak, dBFS) is refused as silent.
+/// A take quieter than this (peak, dBFS) is refused as silent...
 pub const SILENT_PEAK_DBFS: f64 = -60.0;
+/// ...or, over this (16-bit audio's step is -90 dBFS), as too quiet, with the remedy.
+const NOTHING_PEAK_DBFS: f64 = -80.0;
 /// Leading and trailing samples quieter than this, relative to the take's peak, are cut.
 pub const TRIM_BELOW_PEAK_DB: f64 = -50.0;
 /// A take shorter than this after trimming is refused.
@@ -184,14 +186,23 @@ fn prepare_take(
     let peak = samples.iter().fold(0.0f32, |m, &x| m.max(x.abs()));
     let peak_db = 20.0 * f64::from(peak).log10();
     if peak_db < SILENT_PEAK_DBFS {
-        return Err(bad(format!(
-            "is silent (peak {}); a pattern needs a sound louder than {SILENT_PEAK_DBFS} dBFS",
-            if peak > 0.0 {
-                format!("{peak_db:.1} dBFS")
-            } else {
-                "-inf dBFS".to_string()
-            }
-        )));
+        // Under a few steps of 16-bit audio there is nothing to record louder.
+        return Err(bad(if peak_db < NOTHING_PEAK_DBFS {
+            format!(
+                "is silent (peak {}); a pattern needs a sound louder than {SILENT_PEAK_DBFS} dBFS",
+                if peak > 0.0 {
+                    format!("{peak_db:.1} dBFS")
+                } else {
+                    "-inf dBFS".to_string()
+                }
+            )
+        } else {
+            format!(
+                "is too quiet (peak {peak_db:.1} dBFS); a pattern needs a sound louder than \
+                 {SILENT_PEAK_DBFS} dBFS: record it again with more input gain (the stream \
+                 is heard through the same gain)"
+            )
+        }));
     }
     let floor = peak * 10f32.powf((TRIM_BELOW_PEAK_DB / 20.0) as f32);
     let first = samples.iter().position(|x| x.abs() > floor).unwrap_or(0);

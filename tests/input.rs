@@ -228,12 +228,24 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
     let msg = load_error(&dir, "silent.wav", &settings);
     assert!(msg.contains("is silent (peak -inf dBFS)"), "{msg}");
 
+    // Dither at the last bits of 16-bit audio: nothing was recorded.
+    let mut dither = vec![0.0f32; 4410];
+    add_noise(&mut dither, 0.00001, 5);
+    write_wav_f32(&dir.join("dither.wav"), &dither, RATE);
+    let msg = load_error(&dir, "dither.wav", &settings);
+    assert!(
+        msg.contains("is silent (peak -") && msg.contains("louder than -60 dBFS"),
+        "{msg}"
+    );
+    // A hiss 70 dB down: something, recorded with too little gain.
     let mut hiss = vec![0.0f32; 4410];
     add_noise(&mut hiss, 0.0001, 5);
     write_wav_f32(&dir.join("hiss.wav"), &hiss, RATE);
     let msg = load_error(&dir, "hiss.wav", &settings);
     assert!(
-        msg.contains("is silent (peak -") && msg.contains("louder than -60 dBFS"),
+        msg.contains("is too quiet (peak -")
+            && msg.contains("louder than -60 dBFS")
+            && msg.contains("more input gain"),
         "{msg}"
     );
 
