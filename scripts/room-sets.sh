@@ -11,6 +11,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR dc OFFSET
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR mp3 KBITS [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
@@ -32,6 +33,9 @@
 # (an input gain set too high).
 # dc: every file OFFSET (of full scale) higher, 16-bit or as it was: a microphone's or
 # a converter's DC offset; what passes full scale clips.
+# mp3: every file through an MP3 encoder at KBITS kbit/s and back (ffmpeg, LAME; a
+# recording shared or streamed in a lossy format), 16-bit, gapless, so the truth holds;
+# `sequences` as for rate (a short take encoded alone loses its start to the encoder).
 # silence: each sequence begins after SECONDS of digital silence (a recording exported
 # with silence before it, a microphone that delivers zeros until it starts), its truth
 # moved as far; the takes as they were.
@@ -121,6 +125,17 @@ case $kind in
         [[ $offset =~ ^-?0?\.[0-9]+$ ]] || { echo "room-sets.sh: dc $offset: expected a fraction of full scale, such as 0.01" >&2; exit 2; }
         added="every file $offset of full scale higher (a DC offset)"
         ;;
+    mp3)
+        [ $# -ge 1 ] && [ $# -le 2 ] || usage
+        kbits=$1 which=${2:-all}
+        [[ $kbits =~ ^[0-9]+$ ]] || { echo "room-sets.sh: mp3 $kbits: expected kbit/s, such as 64" >&2; exit 2; }
+        command -v ffmpeg > /dev/null || { echo "room-sets.sh: mp3 needs ffmpeg (apt install ffmpeg)" >&2; exit 1; }
+        case $which in
+            all) added="every file through MP3 at $kbits kbit/s and back" ;;
+            sequences) added="the sequences through MP3 at $kbits kbit/s and back, the takes as they were" ;;
+            *) echo "room-sets.sh: mp3 $kbits $which: expected nothing or 'sequences' after the bit rate" >&2; exit 2 ;;
+        esac
+        ;;
     silence | trim | head)
         [ $# -eq 1 ] || usage
         seconds=$1
@@ -143,7 +158,7 @@ case $kind in
         [[ $hold =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db $hold: expected the hold in seconds, such as 0.1" >&2; exit 2; }
         added="every file through a noise gate $over_db dB over its room, held $hold s"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, dc, silence, trim, head or gate" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, dc, mp3, silence, trim, head or gate" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -219,6 +234,9 @@ PY
             cp "$wav" "$out/$name/$rel"
         elif [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
+        elif [ "$kind" = mp3 ]; then
+            ffmpeg -loglevel error -y -i "$wav" -c:a libmp3lame -b:a "${kbits}k" "$tmp/coded.mp3"
+            ffmpeg -loglevel error -y -i "$tmp/coded.mp3" -ac 1 -c:a pcm_s16le "$out/$name/$rel"
         elif [ "$kind" = dc ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" dcshift "$offset"
         elif [ "$kind" = gain ]; then
