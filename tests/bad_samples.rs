@@ -164,6 +164,29 @@ fn a_dc_offset_changes_no_event() {
     }
 }
 
+/// A take analysed alone (a user checking what was enrolled) is a stream that begins
+/// with its sound: each of the bundled impulse takes gives one event, of its own
+/// pattern, at its start. The "pop" opens softly for 30 ms before its burst; until the
+/// room had to be heard for as long as the quiet-before gate looks back (40 ms), that
+/// opening was taken for the room and the take gave nothing.
+#[test]
+fn each_bundled_impulse_take_alone_is_found_as_itself() {
+    let (config, _, _) = example();
+    for name in ["tick", "pop", "boom"] {
+        let mut source = WavSource::open(
+            &root().join(format!("examples/patterns/{name}.wav")),
+            ChannelSelect::Mix,
+        )
+        .unwrap();
+        let rate = source.sample_rate();
+        let (events, _) = detect(&config, &source.read_all().unwrap(), rate);
+        assert!(
+            events.len() == 1 && &*events[0].pattern == name && events[0].time < 0.005,
+            "the {name} take alone: {events:#?}"
+        );
+    }
+}
+
 /// A noise gate, as a live performer or a streamer sets one before the detector: in 5
 /// ms blocks, open from a block whose RMS stands 10 dB over the room (its 10th
 /// percentile block) until 0.1 s after the last such block, zeros while closed.

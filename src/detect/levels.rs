@@ -71,10 +71,10 @@ pub(super) struct LevelInput {
 /// compared with the first's by the rise an onset must make out of the quiet before it
 /// (`rise_db`):
 /// - a frame `rise_db` over every frame whose window ended before its own began, those
-///   frames spanning a window of their own, and none `rise_db` under the first before:
-///   the stream began in its room, heard for a window at least, and a sound now rises
-///   out of it (a sound the stream begins with, a few milliseconds in or swelling, is
-///   no such rise);
+///   frames spanning at least `room_frames` (the room heard for as long as the
+///   quiet-before gate looks back for it), and none `rise_db` under the first before:
+///   the stream began in its room, and a sound now rises out of it (a sound the stream
+///   begins with, a few milliseconds in, swelling, or opening softly, is no such rise);
 /// - a frame `rise_db` under the first: the stream began with a sound. It goes on being
 ///   read until a sound rises `rise_db` out of the quietest frame since (the room after
 ///   the first sound has been heard), so that the floors start from the room itself;
@@ -88,6 +88,8 @@ pub(super) struct StreamStart {
     most: usize,
     /// Frames per window: a frame's window overlaps the `window_frames - 1` before it.
     window_frames: usize,
+    /// A rise counts only from this frame on: the room before it heard for long enough.
+    room_frames: usize,
     /// Each frame's level so far.
     levels: Vec<f32>,
     first_db: f32,
@@ -99,12 +101,14 @@ pub(super) struct StreamStart {
 }
 
 impl StreamStart {
-    /// At most `most` frames, of `window_frames` hops each.
-    pub(super) fn new(rise_db: f32, most: usize, window_frames: usize) -> Self {
+    /// At most `most` frames, of `window_frames` hops each; a rise out of the room
+    /// counts once `room_frames` have been heard (two windows at least).
+    pub(super) fn new(rise_db: f32, most: usize, window_frames: usize, room_frames: usize) -> Self {
         Self {
             rise_db,
             most: most.max(1),
             window_frames: window_frames.max(1),
+            room_frames: room_frames.max(2 * window_frames),
             levels: Vec::with_capacity(most.max(1)),
             first_db: 0.0,
             loudest_db: f32::NEG_INFINITY,
@@ -125,7 +129,7 @@ impl StreamStart {
             self.loudest_db = self.loudest_db.max(self.levels[clear]);
         }
         match self.quietest {
-            None if f >= 2 * self.window_frames && heard_db >= self.loudest_db + self.rise_db => {
+            None if f >= self.room_frames && heard_db >= self.loudest_db + self.rise_db => {
                 return Some(0)
             }
             None if heard_db <= self.first_db - self.rise_db => self.quietest = Some((f, heard_db)),
@@ -367,7 +371,7 @@ mod tests {
     /// The frames `StreamStart` reads of `levels` (dB, one a frame, windows of 4 hops)
     /// before it knows how the stream begins, and what it then says.
     fn stream_start(levels: &[f32]) -> (usize, Option<usize>) {
-        let mut start = StreamStart::new(10.0, 100, 4);
+        let mut start = StreamStart::new(10.0, 100, 4, 14);
         for (f, &l) in levels.iter().enumerate() {
             if let Some(prime) = start.read(l) {
                 return (f + 1, Some(prime));
@@ -388,6 +392,11 @@ mod tests {
         // dB over the frames whose windows ended before its own.
         let swell: Vec<f32> = (0..8).map(|k| -40.0 + 2.0 * k as f32).collect();
         assert_eq!(stream_start(&swell).1, None);
+        // A soft opening of 10 frames, then the burst: the opening is too short to be
+        // the room (the bundled "pop" take, analysed alone).
+        let mut x = vec![-50.0f32; 10];
+        x.extend([-30.0, -25.0, -35.0]);
+        assert_eq!(stream_start(&x).1, None);
         // A hit, its tail, the room, then another sound: the floors are primed with
         // the frames up to the quietest before the second sound.
         let mut x = vec![-20.0f32, -24.0, -32.0, -45.0, -58.0, -60.0, -61.0, -60.0];

@@ -740,7 +740,7 @@ impl SpectralMatcher {
             heard_samples: vec![0.0; sample_capacity],
             received: 0,
             consumed: 0,
-            stream_start: StreamStart::new(0.0, 0, 1),
+            stream_start: StreamStart::new(0.0, 0, 1, 0),
             primed: false,
             prime_powers: Vec::new(),
             prime_levels: Vec::new(),
@@ -834,6 +834,7 @@ impl SpectralMatcher {
             matcher.gates.pre_quiet_db,
             read_ahead_frames,
             matcher.analyzer.win.div_ceil(matcher.hop()),
+            (PRE_QUIET_FROM_SECONDS / HOP_SECONDS).ceil() as usize,
         );
         matcher.prime_powers = Vec::with_capacity(read_ahead_frames * BANDS);
         matcher.prime_levels = Vec::with_capacity(read_ahead_frames);
