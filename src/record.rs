@@ -78,12 +78,18 @@ pub struct FoundTake {
     pub verdict: Result<(), Refusal>,
 }
 
-/// Frame levels (dBFS) of `samples`, one per `FRAME_SECONDS`.
+/// Frame levels (dBFS) of `samples`, one per `FRAME_SECONDS`, around their mean: a
+/// microphone's DC offset is no sound, and would otherwise stand for the room.
 fn frame_levels(samples: &[f32], frame: usize) -> Vec<f64> {
+    let mean = samples.iter().map(|&x| f64::from(x)).sum::<f64>() / samples.len().max(1) as f64;
     samples
         .chunks(frame)
         .map(|c| {
-            let ms = c.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>() / c.len() as f64;
+            let ms = c
+                .iter()
+                .map(|&x| (f64::from(x) - mean).powi(2))
+                .sum::<f64>()
+                / c.len() as f64;
             10.0 * ms.max(1e-14).log10()
         })
         .collect()

@@ -371,3 +371,31 @@ fn record_background_from_a_file_adds_it_to_the_config_and_refuses_silence() {
     );
     assert_eq!(std::fs::read_to_string(&config).unwrap(), waveform);
 }
+
+/// A microphone's DC offset is no sound: the takes of a recording 0.05 of full scale
+/// off zero are found where they are without it. Before, the offset's power stood for
+/// the room, and no sound rose 20 dB out of it.
+#[test]
+fn takes_are_found_through_a_dc_offset() {
+    let rate = 22_050;
+    let mut rec = vec![0.0f32; samples_for(3.0, rate)];
+    for at in [0.5, 1.5] {
+        place(
+            &mut rec,
+            &buzz(rate, 0.2, 160.0),
+            samples_for(at, rate),
+            0.3,
+        );
+    }
+    add_noise(&mut rec, 0.0003, 5);
+    let spans = |rec: &[f32]| -> Vec<(usize, usize)> {
+        onomato::record::find_takes(rec, rate, 5.0)
+            .into_iter()
+            .map(|t| (t.span.start, t.span.end))
+            .collect()
+    };
+    let clean = spans(&rec);
+    assert_eq!(clean.len(), 2, "{clean:?}");
+    let offset: Vec<f32> = rec.iter().map(|x| x + 0.05).collect();
+    assert_eq!(spans(&offset), clean);
+}
