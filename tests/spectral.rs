@@ -336,6 +336,14 @@ fn held_voiced_sounds_report_their_pitch_and_noisy_ones_none() {
     let events = detect_in_blocks(&mut det, &rec, 256);
     assert_eq!(events.len(), 1, "{events:#?}");
     assert_eq!(events[0].pitch, None);
+    // Whole, though it begins right after digital silence in no noise at all, where
+    // the floors rise to it as to a room (it is heard over the room before the zeros).
+    let end = events[0].end.unwrap();
+    assert!(
+        (events[0].time - 0.4).abs() <= 0.05 && (end - 1.2).abs() <= 0.05,
+        "{:?}",
+        events[0]
+    );
 }
 
 #[test]

@@ -34,7 +34,7 @@ const PERIOD_HOPS: usize = 7;
 /// `floor_db`: the frame's power less twice the noise's, in dB (`SILENT_DB` when that
 /// is nothing). The gates compare sounds with each other: noise a few dB under a
 /// sound must not pass for a sound just before it, or for speech around it.
-fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
+pub(super) fn sound_level_db(level_db: f32, floor_db: f32) -> f32 {
     let excess = 10f32.powf(level_db / 10.0) - 2.0 * 10f32.powf(floor_db / 10.0);
     if excess > 0.0 {
         (10.0 * excess.log10()).max(SILENT_DB)
@@ -50,6 +50,8 @@ pub(super) struct FrameLevels {
     pub(super) sound: f32,
     /// Over the floor under the power of the last `PERIOD_HOPS` hops.
     pub(super) rise: f32,
+    /// The frame's power as the bands hear it, dB.
+    pub(super) heard: f32,
 }
 
 /// What the level stage takes of a frame ([`Levels::push`], [`Levels::prime`]).
@@ -166,6 +168,10 @@ pub(super) struct Levels {
     catching_up: [bool; 3],
     /// The last frame was digital silence.
     after_silence: bool,
+    /// The heard floor when the last digital silence began (the room as last heard),
+    /// and the frame where sound came back after it.
+    room_before_silence_db: f32,
+    resumed_at: Option<u64>,
     /// The floors were set by [`Self::prime`].
     primed: bool,
 }
@@ -187,8 +193,19 @@ impl Levels {
             period_hops_seen: 0,
             catching_up: [false; 3],
             after_silence: false,
+            room_before_silence_db: SILENT_DB,
+            resumed_at: None,
             primed: false,
         }
+    }
+
+    /// The room as it was heard before the last digital silence, if sound came back
+    /// after that silence at frame `since` or later: a sound that begins there is heard
+    /// by floors that rise to it as to a room coming back (`push`), not yet over them.
+    pub(super) fn room_before_silence(&self, since: u64) -> Option<f32> {
+        self.resumed_at
+            .filter(|&f| f >= since)
+            .map(|_| self.room_before_silence_db)
     }
 
     /// Whether a stream begins with a sound, from its first frames (before the first is
@@ -245,7 +262,17 @@ impl Levels {
         } = frame;
         let heard_db = self.heard_db(heard);
         let first = self.frames == 0 && !self.primed;
+        if !sound && !self.after_silence {
+            self.room_before_silence_db = if self.frames == 0 && !self.primed {
+                SILENT_DB
+            } else {
+                self.heard_floor_db
+            };
+        }
         let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
+        if resumed {
+            self.resumed_at = Some(self.frames);
+        }
         let (rise, fall) = (self.rise_per_frame, self.fall_per_frame);
         let follow = |floor: f32, level: f32, catching: &mut bool| {
             if first {
@@ -280,6 +307,7 @@ impl Levels {
         FrameLevels {
             sound: sound_level_db(heard_db, self.heard_floor_db),
             rise: sound_level_db(heard_db, self.period_floor_db),
+            heard: heard_db,
         }
     }
 
@@ -334,6 +362,36 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    /// After digital silence (a noise gate closed) the room as last heard before it is
+    /// kept for a sound that begins when the silence ends, and only for that one.
+    #[test]
+    fn the_room_before_digital_silence_is_kept_for_the_sound_after_it() {
+        let n = |s: f64| (s * RATE) as usize;
+        let mut x = crate::detect::white_noise(n(1.0), 0.003, 5);
+        x.extend(vec![0.0; n(0.3)]);
+        x.extend(crate::detect::white_noise(n(0.3), 0.1, 6));
+        let mut levels = Levels::new(WIN, HOP, &OnsetParams::default());
+        let mut resumed = None;
+        let mut room = f32::NAN;
+        for (f, input) in inputs_of(&x).into_iter().enumerate() {
+            let was_silent = levels.after_silence;
+            if input.sound && !was_silent && levels.frames > 0 && resumed.is_none() {
+                room = levels.heard_floor_db;
+            }
+            levels.push(input);
+            if was_silent && input.sound {
+                resumed = Some(f as u64);
+            }
+        }
+        let resumed = resumed.expect("sound after the silence");
+        // The room of uniform noise of amplitude 0.003 (power 3e-6, -55 dB), as last
+        // heard before the silence; not the floors that caught up with the sound.
+        let kept = levels.room_before_silence(resumed).expect("kept");
+        assert!((kept - room).abs() < 1.0 && kept < -50.0, "{kept} dB, room {room} dB");
+        assert_eq!(levels.room_before_silence(resumed + 1), None);
+        assert!(levels.heard_floor_db > kept + 20.0, "{}", levels.heard_floor_db);
     }
 
     #[test]

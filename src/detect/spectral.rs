@@ -91,7 +91,7 @@ use super::features::{
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
-use super::levels::{LevelInput, Levels, StreamStart, SILENT_DB};
+use super::levels::{sound_level_db, LevelInput, Levels, StreamStart, SILENT_DB};
 use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
 use super::pitch::PitchEstimator;
@@ -320,6 +320,8 @@ pub struct SpectralMatcher {
     /// ([`super::levels::FrameLevels::rise`]), for the quiet-before rise and the spans of
     /// recognised sounds, which end where a new sound rises by that measure.
     rise_levels: Vec<f32>,
+    /// Per frame: its power as the bands hear it, dB ([`super::levels::FrameLevels::heard`]).
+    heard_levels: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
     frame_count: u64,
@@ -338,6 +340,9 @@ pub struct SpectralMatcher {
     /// (`SpectralMatcher::follow_stopped_held`), and its span in the context stage.
     stopped_held: HeldStage,
     stopped_held_span: Option<(usize, u64)>,
+    /// The room each held sound (`held`, `stopped_held`) is heard over, when it began
+    /// right after digital silence ([`Levels::room_before_silence`]).
+    held_room: [Option<f32>; 2],
     frame_buf: Vec<f32>,
     window_buf: Vec<f32>,
     instance: Vec<f32>,
@@ -748,6 +753,7 @@ impl SpectralMatcher {
             frames: vec![0.0; frame_capacity * BANDS],
             levels: vec![SILENT_DB; frame_capacity],
             rise_levels: vec![SILENT_DB; frame_capacity],
+            heard_levels: vec![SILENT_DB; frame_capacity],
             frame_capacity,
             frame_count: 0,
             onsets: OnsetDetector::new(
@@ -765,6 +771,7 @@ impl SpectralMatcher {
             stopped_held: HeldStage::new(HeldParams::default(), HOP_SECONDS),
             held_span: None,
             stopped_held_span: None,
+            held_room: [None; 2],
             frame_buf: vec![0.0; BANDS],
             window_buf: vec![0.0; win],
             instance: vec![0.0; FEATURES],
@@ -1121,6 +1128,7 @@ impl SpectralMatcher {
         let frame_levels = self.level_stage.push(level_input);
         self.levels[slot] = frame_levels.sound;
         self.rise_levels[slot] = frame_levels.rise;
+        self.heard_levels[slot] = frame_levels.heard;
 
         let centre = self.analyzer.frame_centre(f);
         self.context.follow(
@@ -1337,7 +1345,8 @@ impl SpectralMatcher {
             if self.patterns[pi].kind == PatternKind::Continuous {
                 // A held sound covers as long as the held stage hears it go on.
                 self.end_stopped_held();
-                let loudest = self.loudest_since(&self.levels, onset_frame);
+                self.held_room[Stage::Stopped as usize] = self.room_under(onset_frame);
+                let loudest = self.held_loudest_since(Stage::Stopped, onset_frame);
                 let slot = self.context.held_began(covered_from, near_speech);
                 self.stopped_held_span = Some((slot, covered_from));
                 self.stopped_held
@@ -1371,14 +1380,15 @@ impl SpectralMatcher {
             // A held sound it replaces ends first (a stopped one that was followed as
             // well), so that its end does not close the new one's span.
             self.end_stopped_held();
-            let loudest = self.loudest_since(&self.levels, onset_frame);
+            let room = self.room_under(onset_frame);
             let newest = self.frame_count - 1;
-            if let Some(h) = self
-                .held
-                .begin(pi, time_sample, best_score, loudest, newest)
-            {
+            if let Some(h) = self.held.end() {
                 self.close_held(h, out);
             }
+            self.held_room[Stage::Fired as usize] = room;
+            let loudest = self.held_loudest_since(Stage::Fired, onset_frame);
+            self.held
+                .begin(pi, time_sample, best_score, loudest, newest);
             let slot = self.context.held_began(covered_from, false);
             self.held_span = Some((slot, covered_from));
         } else {
@@ -1954,13 +1964,38 @@ impl SpectralMatcher {
         let info = &self.patterns[held.current()?.pattern];
         let slot = (f % self.frame_capacity as u64) as usize;
         let bands = self.analyzer.cepstrum.bands();
+        let level = match self.held_room[stage as usize] {
+            Some(room) => sound_level_db(self.heard_levels[slot], room),
+            None => self.levels[slot],
+        };
         held.follow(
             f,
             &self.frames[slot * BANDS..slot * BANDS + bands],
-            self.levels[slot],
+            level,
             &info.sustain[..bands],
             info.continuous_threshold,
         )
+    }
+
+    /// The room a held sound whose onset is at frame `onset_frame` is heard over, when
+    /// it began right after digital silence (the silence within its quiet-before span):
+    /// the room as last heard before the silence. After digital silence the floors rise
+    /// to the first sound as to a room coming back (`docs/rooms.md`, "Digital
+    /// silence"), and a held sound (a "hoo" a noise gate opens on) would sink under
+    /// them and end in pieces.
+    fn room_under(&self, onset_frame: u64) -> Option<f32> {
+        let quiet = (PRE_QUIET_FROM_SECONDS / HOP_SECONDS).ceil() as u64;
+        self.level_stage
+            .room_before_silence(onset_frame.saturating_sub(quiet))
+    }
+
+    /// The loudest level since `first` of the held sound `stage` follows, as it is
+    /// heard ([`Self::follow_stage`]).
+    fn held_loudest_since(&self, stage: Stage, first: u64) -> f32 {
+        match self.held_room[stage as usize] {
+            Some(room) => sound_level_db(self.loudest_since(&self.heard_levels, first), room),
+            None => self.loudest_since(&self.levels, first),
+        }
     }
 
     /// Ends the held sound the guard stopped, if one is going on.
