@@ -7,9 +7,10 @@
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
 //! the quiet-before rise and the spans of recognised sounds read). It also tells how a
 //! stream begins ([`StreamStart`]): the floors of one that begins with a sound start
-//! from the room that follows it ([`Levels::prime`]), as the onset stage's do. Runs on
-//! the detector thread, inside the spectral matcher, once per frame; allocates nothing
-//! after `new`.
+//! from the room that follows it ([`Levels::prime`]), as the onset stage's do; and it
+//! keeps the room as last heard before digital silence, for a held sound that begins
+//! as the silence ends ([`Levels::room_before_silence`]). Runs on the detector thread,
+//! inside the spectral matcher, once per frame; allocates nothing after `new`.
 
 use super::features::HOP_SECONDS;
 use super::onset::OnsetParams;
