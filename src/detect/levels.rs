@@ -390,9 +390,16 @@ mod tests {
         // The room of uniform noise of amplitude 0.003 (power 3e-6, -55 dB), as last
         // heard before the silence; not the floors that caught up with the sound.
         let kept = levels.room_before_silence(resumed).expect("kept");
-        assert!((kept - room).abs() < 1.0 && kept < -50.0, "{kept} dB, room {room} dB");
+        assert!(
+            (kept - room).abs() < 1.0 && kept < -50.0,
+            "{kept} dB, room {room} dB"
+        );
         assert_eq!(levels.room_before_silence(resumed + 1), None);
-        assert!(levels.heard_floor_db > kept + 20.0, "{}", levels.heard_floor_db);
+        assert!(
+            levels.heard_floor_db > kept + 20.0,
+            "{}",
+            levels.heard_floor_db
+        );
     }
 
     #[test]
