@@ -206,8 +206,11 @@ pub fn own_background(
         .iter()
         .map(|path| {
             let (samples, rate) = read_background(path, select)?;
-            let samples = resample_clip(&samples, rate, settings.sample_rate)
+            let mut samples = resample_clip(&samples, rate, settings.sample_rate)
                 .map_err(DetectError::BackgroundAudio)?;
+            // Heard as the stream is: its offset taken away.
+            let mut dc_block = features::DcBlock::new(f64::from(settings.sample_rate));
+            samples.iter_mut().for_each(|x| *x = dc_block.run(*x));
             let model = spectral::background_model(&samples, settings);
             if model.is_empty() {
                 return Err(DetectError::EmptyBackground(path.clone()));
