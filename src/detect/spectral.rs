@@ -109,6 +109,11 @@ use crate::pattern::Pattern;
 /// own speech out, 10 ms (as it was) let a consonant 5-10 ms after a vowel through.
 const PRE_QUIET_FROM_SECONDS: f64 = 0.040;
 const PRE_QUIET_TO_SECONDS: f64 = 0.005;
+
+/// The frames the quiet before an onset reaches back over (`PRE_QUIET_FROM_SECONDS`).
+fn quiet_before_frames() -> u64 {
+    (PRE_QUIET_FROM_SECONDS / HOP_SECONDS).ceil() as u64
+}
 /// Shift tolerance when comparing frames with a template.
 pub(super) const MAX_SHIFT: usize = 1;
 /// Frames of features and samples kept: the longest speech guard and a decision.
@@ -841,7 +846,7 @@ impl SpectralMatcher {
             matcher.gates.pre_quiet_db,
             read_ahead_frames,
             matcher.analyzer.win.div_ceil(matcher.hop()),
-            (PRE_QUIET_FROM_SECONDS / HOP_SECONDS).ceil() as usize,
+            quiet_before_frames() as usize,
         );
         matcher.prime_powers = Vec::with_capacity(read_ahead_frames * BANDS);
         matcher.prime_levels = Vec::with_capacity(read_ahead_frames);
@@ -1984,9 +1989,8 @@ impl SpectralMatcher {
     /// silence"), and a held sound (a "hoo" a noise gate opens on) would sink under
     /// them and end in pieces.
     fn room_under(&self, onset_frame: u64) -> Option<f32> {
-        let quiet = (PRE_QUIET_FROM_SECONDS / HOP_SECONDS).ceil() as u64;
         self.level_stage
-            .room_before_silence(onset_frame.saturating_sub(quiet))
+            .room_before_silence(onset_frame.saturating_sub(quiet_before_frames()))
     }
 
     /// The loudest level since `first` of the held sound `stage` follows, as it is
