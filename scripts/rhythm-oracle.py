@@ -39,9 +39,18 @@ DEVSETS = HERE.parent.parent / "shared" / "devsets"
 sys.path.insert(0, str(DEVSETS))
 import build  # noqa: E402  (the development sets' generator)
 
-_spec = importlib.util.spec_from_file_location("other_voices", HERE / "other-voices.py")
-other_voices = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(other_voices)
+
+
+def sibling(name, file):
+    """A script beside this one, loaded as a module."""
+    spec = importlib.util.spec_from_file_location(name, HERE / file)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+other_voices = sibling("other_voices", "other-voices.py")
+rhythm_misses = sibling("rhythm_misses", "rhythm-misses.py")
 
 WINDOWS_S = (0.025, 0.05)
 STEP = 2.0 / 32768  # two 16-bit steps
@@ -91,14 +100,6 @@ def f1_finding(words_found, words):
     return 2 * recall / (1 + recall)
 
 
-def pattern_args(set_dir):
-    out = subprocess.run(
-        ["python3", str(DEVSETS / "score.py"), "--pattern-args", set_dir],
-        capture_output=True, text=True, check=True,
-    ).stdout
-    return [a for a in out.split("\n") if a]
-
-
 def main():
     if len(sys.argv) < 3:
         sys.exit("usage: rhythm-oracle.py ONOMATO_BIN D4_SET_DIR...")
@@ -130,7 +131,7 @@ def main():
             truth = [(float(r["onset_s"]), r["label"]) for r in csv.DictReader(f)]
         if [(round(on, 4), label) for on, label, _ in parts] != [(round(t, 4), l) for t, l in truth]:
             sys.exit(f"rhythm-oracle.py: {set_dir}: the words rebuilt are not seq_02.csv's")
-        run = subprocess.run([binary, "analyze", seq, *pattern_args(set_dir), "--format", "json"],
+        run = subprocess.run([binary, "analyze", seq, *rhythm_misses.pattern_args(set_dir), "--format", "json"],
                              capture_output=True, text=True)
         if run.returncode != 0:
             sys.exit(f"rhythm-oracle.py: analyze failed on {seq}: {run.stderr.strip()}")
@@ -139,14 +140,14 @@ def main():
         found = found_own = 0
         for on, label, y in parts:
             at = int(round(on * sr))
+            holds = {}
             for w in WINDOWS_S:
                 span = slice(at, at + int(w * sr))
-                if np.sum(y[span] ** 2) >= np.sum((total[span] - y[span]) ** 2):
-                    own[w] += 1
+                holds[w] = np.sum(y[span] ** 2) >= np.sum((total[span] - y[span]) ** 2)
+                own[w] += holds[w]
             hit = any(e["pattern"] == label and abs(e["time"] - on) <= 0.05 for e in events)
             found += hit
-            span = slice(at, at + int(WINDOWS_S[0] * sr))
-            found_own += hit and np.sum(y[span] ** 2) >= np.sum((total[span] - y[span]) ** 2)
+            found_own += hit and holds[WINDOWS_S[0]]
         n = len(parts)
         print(f"| {short} | {n} | {own[WINDOWS_S[0]]} | {own[WINDOWS_S[1]]} | {found} | {found_own} "
               f"| {f1_finding(own[WINDOWS_S[0]], n):.2f} | {f1_finding(own[WINDOWS_S[1]], n):.2f} |")
