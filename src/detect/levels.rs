@@ -264,7 +264,7 @@ impl Levels {
         let heard_db = self.heard_db(heard);
         let first = self.frames == 0 && !self.primed;
         if !sound && !self.after_silence {
-            self.room_before_silence_db = if self.frames == 0 && !self.primed {
+            self.room_before_silence_db = if first {
                 SILENT_DB
             } else {
                 self.heard_floor_db
@@ -356,7 +356,7 @@ mod tests {
                 let energy = |from: usize| x[from..end].iter().map(|&v| f64::from(v).powi(2)).sum();
                 let heard: f64 = energy(end - WIN);
                 LevelInput {
-                    frame_db: 10.0 * (heard / WIN as f64 + 1e-12).log10() as f32,
+                    frame_db: Levels::power_db(heard / WIN as f64),
                     heard,
                     newest_hop: energy(end - HOP),
                     sound: heard > 0.0,

@@ -1385,15 +1385,15 @@ impl SpectralMatcher {
             // A held sound it replaces ends first (a stopped one that was followed as
             // well), so that its end does not close the new one's span.
             self.end_stopped_held();
-            let room = self.room_under(onset_frame);
+            self.held_room[Stage::Fired as usize] = self.room_under(onset_frame);
+            let loudest = self.held_loudest_since(Stage::Fired, onset_frame);
             let newest = self.frame_count - 1;
-            if let Some(h) = self.held.end() {
+            if let Some(h) = self
+                .held
+                .begin(pi, time_sample, best_score, loudest, newest)
+            {
                 self.close_held(h, out);
             }
-            self.held_room[Stage::Fired as usize] = room;
-            let loudest = self.held_loudest_since(Stage::Fired, onset_frame);
-            self.held
-                .begin(pi, time_sample, best_score, loudest, newest);
             let slot = self.context.held_began(covered_from, false);
             self.held_span = Some((slot, covered_from));
         } else {
