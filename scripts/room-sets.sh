@@ -164,6 +164,49 @@ command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install s
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+if [ "$kind" = gate ]; then
+    # The gate's two steps over raw 32-bit float samples, in 5 ms blocks:
+    #   room OVER_DB RAW:RATE...           the threshold, OVER_DB over the 10th percentile block
+    #   gate IN OUT RATE THRESHOLD_DB HOLD the samples through the gate
+    cat > "$tmp/gate.py" <<'PY'
+import array, math, sys
+
+
+def samples(raw):
+    x = array.array("f")
+    with open(raw, "rb") as f:
+        x.frombytes(f.read())
+    return x
+
+
+def blocks(x, rate):
+    """(start, end, level dB or None for digital silence) of each 5 ms block."""
+    block = max(1, round(0.005 * rate))
+    for at in range(0, len(x), block):
+        chunk = x[at:at + block]
+        power = sum(v * v for v in chunk) / len(chunk)
+        yield at, at + len(chunk), 10 * math.log10(power) if power > 0 else None
+
+
+if sys.argv[1] == "room":
+    levels = sorted(level for arg in sys.argv[3:] for raw, rate in [arg.rsplit(":", 1)]
+                    for _, _, level in blocks(samples(raw), int(rate)) if level is not None)
+    print(f"{levels[len(levels) // 10] + float(sys.argv[2]):.2f}" if levels else "0")
+else:
+    src, dst, rate, threshold_db, hold = sys.argv[2:7]
+    x = samples(src)
+    hold_blocks, left = round(float(hold) / 0.005), 0
+    for start, end, level in list(blocks(x, int(rate))):
+        if level is not None and level >= float(threshold_db):
+            left = hold_blocks + 1
+        if left == 0:
+            x[start:end] = array.array("f", bytes(4 * (end - start)))
+        else:
+            left -= 1
+    with open(dst, "wb") as f:
+        x.tofile(f)
+PY
+fi
 count=0
 for set in "$src"/*/; do
     set=${set%/}
@@ -206,27 +249,14 @@ PY
     done
     if [ "$kind" = gate ]; then
         # The set's room: the 10th percentile of its sequences' 5 ms blocks.
+        raws=()
         for wav in "$set"/seq_*.wav; do
-            sox -R -V1 "$wav" -t f32 -c 1 "$tmp/$(basename "$wav" .wav).f32"
-            soxi -r "$wav" 2> /dev/null > "$tmp/$(basename "$wav" .wav).rate"
+            raw=$tmp/$(basename "$wav" .wav).f32
+            sox -R -V1 "$wav" -t f32 -c 1 "$raw"
+            raws+=("$raw:$(soxi -r "$wav" 2> /dev/null)")
         done
-        threshold_db=$(python3 - "$over_db" "$tmp" <<'PY'
-import array, glob, math, sys
-levels = []
-for raw in glob.glob(sys.argv[2] + "/seq_*.f32"):
-    x = array.array("f")
-    with open(raw, "rb") as f:
-        x.frombytes(f.read())
-    block = max(1, round(0.005 * int(open(raw[:-4] + ".rate").read())))
-    for at in range(0, len(x), block):
-        power = sum(v * v for v in x[at:at + block]) / len(x[at:at + block])
-        if power > 0:
-            levels.append(10 * math.log10(power))
-levels.sort()
-print(f"{levels[len(levels) // 10] + float(sys.argv[1]):.2f}" if levels else "0")
-PY
-)
-        rm -f "$tmp"/seq_*.f32 "$tmp"/seq_*.rate
+        threshold_db=$(python3 "$tmp/gate.py" room "$over_db" "${raws[@]}")
+        rm -f "$tmp"/seq_*.f32
     fi
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
@@ -256,27 +286,7 @@ PY
             # file's own encoding.
             rate=$(soxi -r "$wav" 2> /dev/null)
             sox -R -V1 "$wav" -t f32 -c 1 "$tmp/in.f32"
-            python3 - "$tmp/in.f32" "$tmp/out.f32" "$rate" "$threshold_db" "$hold" <<'PY'
-import array, math, sys
-src, dst, rate, threshold_db, hold = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
-x = array.array("f")
-with open(src, "rb") as f:
-    x.frombytes(f.read())
-block = max(1, round(0.005 * rate))
-hold_blocks = round(hold / 0.005)
-left = 0
-for at in range(0, len(x), block):
-    chunk = x[at:at + block]
-    power = sum(v * v for v in chunk) / len(chunk)
-    if power > 0 and 10 * math.log10(power) >= threshold_db:
-        left = hold_blocks + 1
-    if left == 0:
-        x[at:at + block] = array.array("f", bytes(4 * len(chunk)))
-    else:
-        left -= 1
-with open(dst, "wb") as f:
-    x.tofile(f)
-PY
+            python3 "$tmp/gate.py" gate "$tmp/in.f32" "$tmp/out.f32" "$rate" "$threshold_db" "$hold"
             sox -R -V1 -t f32 -r "$rate" -c 1 "$tmp/out.f32" \
                 -e "$(soxi -e "$wav" 2> /dev/null | sed 's/ .*//; s/Signed/signed-integer/; s/Floating/floating-point/')" \
                 -b "$(soxi -b "$wav" 2> /dev/null)" "$out/$name/$rel"
