@@ -7,6 +7,7 @@ mod common;
 
 use common::*;
 use onomato::analyze::detect_in_blocks;
+use onomato::audio::resample_clip;
 use onomato::config::{DetectorSettings, Method, PatternKind};
 use onomato::eval::{score, Annotation};
 use onomato::{Detector, Event, Pattern};
@@ -227,6 +228,41 @@ fn strength_follows_the_level_of_each_sound() {
             w[0].1 < w[1].1,
             "strength order does not follow gain: {by_gain:?}"
         );
+    }
+}
+
+/// A take recorded at 44.1 kHz carries more than a 16 or 8 kHz input does (8.7 kHz at
+/// the working rate, against 6.3 and 3.2): heard through such an input, copies of it at
+/// three gains are as strong as their gain, as they are at the take's own rate, not
+/// weaker by what the input cannot carry.
+#[test]
+fn strength_through_a_narrower_input_than_the_take_follows_the_gain() {
+    let settings = spectral();
+    // A bright sound, most of whose energy lies over 3.2 kHz, as it reaches the working
+    // rate from a 44.1 kHz recording.
+    let at_44k = resample_clip(&snare(1), RATE, 44_100).unwrap();
+    let take = resample_clip(&at_44k, 44_100, RATE).unwrap();
+    let gains = [1.0f32, 0.5, 0.25];
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    for g in gains {
+        rec.extend(take.iter().map(|v| v * g));
+        rec.extend(vec![0.0; samples_for(0.3, RATE)]);
+    }
+    add_noise(&mut rec, 0.0002, 3);
+    for input_rate in [RATE, 16_000, 8_000] {
+        let input = resample_clip(&rec, RATE, input_rate).unwrap();
+        let pattern =
+            Pattern::from_samples("k", PatternKind::Impulse, vec![take.clone()], &settings);
+        let mut det = Detector::new(vec![pattern.unwrap()], &settings, input_rate).unwrap();
+        let events = detect_in_blocks(&mut det, &input, 256);
+        let strengths: Vec<f64> = events.iter().map(|e| e.strength).collect();
+        assert_eq!(events.len(), gains.len(), "{input_rate} Hz: {strengths:?}");
+        for (s, g) in strengths.iter().zip(gains) {
+            assert!(
+                (0.8..1.25).contains(&(s / f64::from(g))),
+                "{input_rate} Hz, gain {g}: {strengths:?}"
+            );
+        }
     }
 }
 

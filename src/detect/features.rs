@@ -407,6 +407,25 @@ pub(super) fn present_bands(rate: f64, content_top_hz: f64) -> usize {
         .max(2)
 }
 
+/// The share of a mean power spectrum (linear, as [`pool_power`] gives it) that lies
+/// in its first `bands` bands; 1 for a silent one. An energy measured over every
+/// frequency, times this, is the energy in the bands: a sound's strength compares an
+/// instance and a take in the bands both carry, so that a take recorded at a full rate
+/// is not louder than its instance by what the input cannot carry (a 16 kHz headset
+/// carries 6.3 kHz).
+pub(super) fn share_in_bands(power: &[f32], bands: usize) -> f64 {
+    let all: f64 = power.iter().map(|&p| f64::from(p)).sum();
+    let under: f64 = power[..bands.min(power.len())]
+        .iter()
+        .map(|&p| f64::from(p))
+        .sum();
+    if all > 0.0 {
+        under / all
+    } else {
+        1.0
+    }
+}
+
 /// The mean power spectrum (linear) of `k` consecutive frames (each `BANDS` dB values,
 /// from `frame(i)`), into `out`: what [`features_of_power`] turns into features.
 /// Averaging powers rather than dB lets the loud frames of the attack lead: on the
@@ -684,6 +703,22 @@ mod tests {
         let low_again = pooled(&mut analyzer, 410.0);
         let high = pooled(&mut analyzer, 3000.0);
         assert!(similarity(&low, &low_again) > similarity(&low, &high) + 0.3);
+    }
+
+    #[test]
+    fn the_share_in_the_lower_bands_of_a_tone_is_all_under_it_and_none_over_it() {
+        let mut analyzer = Analyzer::new(RATE);
+        let x = sine(1000.0, 0.5, analyzer.win);
+        let mut frame = vec![0.0f32; BANDS];
+        analyzer.frame(&x, &mut frame);
+        let mut power = vec![0.0f32; BANDS];
+        pool_power(1, |_| &frame, &mut power);
+        // The bands that lie wholly under 1 kHz hold none of it but the window's
+        // leakage (its sidelobes, 31 dB down and falling); those up to 1.5 kHz all of it.
+        assert!(share_in_bands(&power, present_bands(RATE, 700.0)) < 1e-2);
+        assert!(share_in_bands(&power, present_bands(RATE, 1500.0)) > 0.99);
+        assert_eq!(share_in_bands(&power, BANDS), 1.0);
+        assert_eq!(share_in_bands(&[0.0; BANDS], 4), 1.0);
     }
 
     #[test]

@@ -44,13 +44,14 @@
 //! `SpectralMatcher::scores_over`), and so, over two, is an instance that its first
 //! window leaves between two impulse patterns whose takes differ there
 //! (`BETWEEN_TWO_GAP`); every gate still judges the first window.
-//! Each onset is decided once, so a sound never gives two events. A
-//! sound whose strength (its amplitude against the take's over the decision window) is
-//! below `min_strength` is not the user's (a voice across the room, a breath) and does not
-//! fire either. Nor does an onset inside the last impulse's take that the take itself
-//! has at that time, at that level, and that resembles it as well as its best pattern
-//! does or nearly as well as a take resembles itself (the closing "p" of a "pop"): see
-//! `SpectralMatcher::continues_last_impulse`.
+//! Each onset is decided once, so a sound never gives two events. A sound whose
+//! strength (its amplitude against the take's over the decision window, both in the
+//! bands compared, so that a take that carries more than the input is not louder by
+//! what the input cannot carry) is below `min_strength` is not the user's (a voice
+//! across the room, a breath) and does not fire either. Nor does an onset inside the
+//! last impulse's take that the take itself has at that time, at that level, and that
+//! resembles it as well as its best pattern does or nearly as well as a take resembles
+//! itself (the closing "p" of a "pop"): see `SpectralMatcher::continues_last_impulse`.
 //!
 //! Exact copies: an onset that did not fire (but by the speech guard) is checked once
 //! 0.25 s of its sound is in, by its waveform against each impulse take; a copy of a
@@ -86,8 +87,8 @@ use super::enrol::{
     SOFT_ONSET_RANGE_DB,
 };
 use super::features::{
-    features_of_power, normalise, pool_power, present_bands, similarity, top_hz, Analyzer,
-    Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity, top_hz,
+    Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
@@ -134,7 +135,7 @@ struct PatternInfo {
 
 /// What an onset's first window showed ([`SpectralMatcher::first_look`]): its best
 /// pattern, the evidence that does not depend on the pattern, the energy of its
-/// decision window and its peak level (dB of sound, by the quiet-before rise's measure:
+/// decision window in the bands compared and its peak level (dB of sound, by the quiet-before rise's measure:
 /// where its span starts to follow its sound). Kept while its decision waits for more
 /// windows, so that every gate judges the first window once.
 #[derive(Clone, Copy)]
@@ -1495,6 +1496,12 @@ impl SpectralMatcher {
         if bands != self.analyzer.cepstrum.bands() {
             self.compare_bands(bands);
         }
+        // The decision window's energy in the bands compared, once per onset (the
+        // window pooled anew: scoring leaves the last shift's).
+        let early = {
+            let power = self.window_power(onset_frame, 1);
+            self.in_compared_bands(self.decision_window_energy(time_sample), &power)
+        };
         self.score_patterns(onset_frame);
         let mut best = 0;
         for (p, s) in self.pattern_scores.iter().enumerate() {
@@ -1502,9 +1509,6 @@ impl SpectralMatcher {
                 best = p;
             }
         }
-        // Once per onset, so that the explanation has it too: a sum over the 25 ms
-        // window, next to the pooling of every shift that scoring did.
-        let early = self.decision_window_energy(time_sample);
         let guard = self.guard(time_sample, peak);
         let over_fired_impulse = self.over_fired_impulse(time_sample);
         self.over_tail_shares.fill(0.0);
@@ -1655,7 +1659,8 @@ impl SpectralMatcher {
 
     /// The evidence about the onset being classified as an instance of pattern `pi`:
     /// `context` with the pattern's own score, threshold, held sound and strength
-    /// (`early`, the energy of the onset's decision window, against its best take's).
+    /// (`early`, the energy of the onset's decision window, against its best take's, both
+    /// in the bands compared).
     fn as_instance_of(&self, pi: usize, context: &Evidence, early: f64) -> Evidence {
         let PatternScore { score, take, .. } = self.pattern_scores[pi];
         Evidence {
@@ -1664,7 +1669,7 @@ impl SpectralMatcher {
             explained_over_tail: self.over_tail_share(pi),
             threshold: self.patterns[pi].threshold,
             held_by_best_pattern: self.held.current().is_some_and(|h| h.pattern == pi),
-            strength: (early / self.templates[take].early_energy.max(1e-12)).sqrt(),
+            strength: (early / self.take_energy(take).max(1e-12)).sqrt(),
             ..*context
         }
     }
@@ -1835,6 +1840,18 @@ impl SpectralMatcher {
             .sum()
     }
 
+    /// `energy`, of a window whose mean power spectrum is `power`, in the bands compared
+    /// ([`share_in_bands`]).
+    fn in_compared_bands(&self, energy: f64, power: &[f32]) -> f64 {
+        energy * share_in_bands(power, self.analyzer.cepstrum.bands())
+    }
+
+    /// The energy of take `take`'s decision window in the bands compared.
+    fn take_energy(&self, take: usize) -> f64 {
+        let t = &self.templates[take];
+        self.in_compared_bands(t.early_energy, &t.pooled_power)
+    }
+
     /// Pools the decision frames from frame `first` (still in the ring) into
     /// `self.instance`.
     fn pool_instance(&mut self, first: u64) {
@@ -1899,8 +1916,11 @@ impl SpectralMatcher {
         self.room.set(self.onsets.band_floors());
         self.room
             .hear(&self.instance_power, self.analyzer.cepstrum.bands());
+        let energy = self.in_compared_bands(
+            self.decision_window_energy(time_sample),
+            &self.instance_power,
+        );
         let template = &self.templates[last.template];
-        let energy = self.decision_window_energy(time_sample);
         for k in lags {
             let Some(later) = template.window_at(k) else {
                 continue;
@@ -1908,7 +1928,9 @@ impl SpectralMatcher {
             self.room
                 .take(later, None, &self.analyzer.cepstrum, &mut self.heard_take);
             let similarity = similarity(&self.heard_take, &self.instance);
-            let expected = template.later_energy[k - 1] * last.strength * last.strength;
+            let expected = self.in_compared_bands(template.later_energy[k - 1], later)
+                * last.strength
+                * last.strength;
             let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
             let alike = similarity >= CONTINUATION_SIMILARITY.min(best_score);
             if alike && db.abs() <= CONTINUATION_DB {
