@@ -203,8 +203,8 @@ pub fn write_json(
 /// (marked `*` when it began over an impulse that fired), over such a word's tail the
 /// share of its sound its pattern's takes explain there (`new`), how much of its sound
 /// the choice of its pattern heard, what of its best pattern it resembled most (a take,
-/// the tracked template or a kept instance), and what became of it (`--explain`, on
-/// stderr).
+/// the tracked template or a kept instance), and what became of it, with the sound held
+/// against it when there is one (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
@@ -224,9 +224,16 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
         let num = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
+        let because_of = r.because_of.map_or(String::new(), |s| {
+            if s.to > s.from {
+                format!(" ({:.4}-{:.4} s)", s.from, s.to)
+            } else {
+                format!(" ({:.4} s)", s.from)
+            }
+        });
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {}{}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {}{}{}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -244,6 +251,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             r.matched_by.map_or("-", MatchedBy::as_str),
             r.outcome.as_str(),
             if r.guard_by_stopped_speech { "*" } else { "" },
+            because_of,
         )?;
     }
     Ok(())

@@ -4,8 +4,10 @@
 //! in figure 2 of the paper. With the spectral method, which scores a sound only at its
 //! onset, each panel shows the score of each decided event as a dot, and every onset
 //! that did not fire as a ring at its best score, under the pattern it resembled most,
-//! with the name of the gate that stopped it (as `--explain` lists them); the waveform
-//! panel marks those onsets with a grey line.
+//! with the name of the gate that stopped it (as `--explain` lists them) and, as a thin
+//! line at its height, the sound that gate held against it (the unrecognised sound that
+//! closed the speech guard, the impulse it continues...); the waveform panel marks
+//! those onsets with a grey line.
 //!
 //! Runs on the main thread of `onomato analyze`, after the analysis.
 
@@ -254,6 +256,21 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
                 .map_err(|e| fail(&e))?
                 .label(format!("{name}: onset that did not fire"))
                 .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+            let held_against: Vec<_> = rejected
+                .iter()
+                .filter_map(|o| o.because_of.map(|s| (s, at(o).1)))
+                .collect();
+            if !held_against.is_empty() {
+                chart
+                    .draw_series(held_against.iter().map(|&(s, y)| {
+                        PathElement::new(vec![(s.from, y), (s.to, y)], c.mix(0.5).stroke_width(2))
+                    }))
+                    .map_err(|e| fail(&e))?
+                    .label(format!("{name}: the sound held against it"))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.mix(0.5).stroke_width(2))
+                    });
+            }
             let style = ("sans-serif", 10).into_font().color(&BLACK.mix(0.7));
             chart
                 .draw_series(rejected.iter().map(|o| {

@@ -931,6 +931,33 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             .unwrap_or_else(|| panic!("no matched_by: {o}"));
         assert!(["take", "tracked", "kept"].contains(&by), "{o}");
     }
+    // The sound the deciding stage held against an onset, where one did: the impulse
+    // that fired and whose own later sound it is, or that it repeats, from its event's
+    // time; the sound before it, for the guard; nothing for the gates that judge the onset
+    // alone.
+    let impulse_at = |t: f64| {
+        events
+            .iter()
+            .any(|e| e["kind"] == "impulse" && (e["time"].as_f64().unwrap() - t).abs() < 1e-4)
+    };
+    let mut continued = 0;
+    for o in onsets.iter().filter(|o| o["outcome"] != "fired") {
+        let time = o["time"].as_f64().unwrap();
+        let held_against = &o["because_of"];
+        let from = held_against["from"].as_f64();
+        match o["outcome"].as_str().unwrap() {
+            "continuation" | "same_onset" => {
+                let from = from.unwrap_or_else(|| panic!("no because_of: {o}"));
+                assert!(impulse_at(from) && from < time, "{o}");
+                continued += 1;
+            }
+            "speech_guard" | "held_continues" => {
+                assert!(from.is_some_and(|f| f < time), "{o}");
+            }
+            _ => assert!(held_against.is_null(), "{o}"),
+        }
+    }
+    assert!(continued > 0, "no onset continued an impulse: {onsets:?}");
     // A repeated sound is soon matched by what tracking kept of it, not only the takes.
     assert!(
         onsets

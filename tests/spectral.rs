@@ -9,6 +9,7 @@ use common::*;
 use onomato::analyze::detect_in_blocks;
 use onomato::audio::resample_clip;
 use onomato::config::{DetectorSettings, Method, PatternKind};
+use onomato::detect::Outcome;
 use onomato::eval::{score, Annotation};
 use onomato::{Detector, Event, Pattern};
 
@@ -464,10 +465,29 @@ fn hits_right_after_an_unrecognised_sustained_sound_are_ignored_unless_the_guard
         rec.extend(vec![0.0; samples_for(0.8, RATE)]);
     }
     add_noise(&mut rec, 0.0005, 12);
-    let guarded = detect(&spectral(), &rec, 256);
+    let mut det = Detector::new(enrol(&spectral()), &spectral(), RATE).unwrap();
+    det.enable_explain();
+    let guarded = detect_in_blocks(&mut det, &rec, 256);
     assert_eq!(kicks_found(&guarded, &after_vowel), 0, "{guarded:#?}");
     assert_eq!(kicks_found(&guarded, &alone), 4, "{guarded:#?}");
     assert_eq!(guarded.len(), 4, "{guarded:#?}");
+    // `--explain` says what closed the guard on each: the vowel before it (0.4 to 0.15 s
+    // before the kick), give or take half a frame.
+    let records = det.take_explain().unwrap();
+    for kick in &after_vowel {
+        let stopped = records
+            .iter()
+            .find(|r| (r.time - kick).abs() < 0.01)
+            .unwrap_or_else(|| panic!("no onset at {kick}: {records:#?}"));
+        let vowel = stopped.because_of.unwrap_or_else(|| panic!("{stopped:#?}"));
+        assert!(
+            stopped.outcome == Outcome::SpeechGuard
+                && vowel.from >= kick - 0.41
+                && vowel.to <= kick - 0.14
+                && vowel.to - vowel.from >= 0.2,
+            "{stopped:#?}"
+        );
+    }
     let unguarded = detect(
         &DetectorSettings {
             speech_guard_seconds: 0.0,

@@ -330,16 +330,10 @@ impl Context {
     pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
         let (mut unrecognised, mut near_speech) = (0, 0);
         for (centre, level) in frames {
-            if level <= SILENT_DB
-                || level < peak_db - self.params.guard_db
-                || self.recognised_at(centre)
-            {
-                continue;
-            }
-            if self.near_speech_at(centre) {
-                near_speech += 1;
-            } else {
-                unrecognised += 1;
+            match self.counted(centre, level, peak_db) {
+                Some(Counted::Unrecognised) => unrecognised += 1,
+                Some(Counted::NearSpeech) => near_speech += 1,
+                None => {}
             }
         }
         if unrecognised >= self.guard_frames {
@@ -350,6 +344,52 @@ impl Context {
             Guard::Open
         }
     }
+
+    /// What closed the guard (`guard`, its judgement of the same `frames`): the centres
+    /// of the first and last frames of sound it counted, the stopped sounds near speech
+    /// among them only when it closed by them. None when it did not close.
+    pub(super) fn guard_sound(
+        &self,
+        frames: impl Iterator<Item = (u64, f32)>,
+        peak_db: f32,
+        guard: Guard,
+    ) -> Option<(u64, u64)> {
+        let mut span: Option<(u64, u64)> = None;
+        for (centre, level) in frames {
+            let counts = match self.counted(centre, level, peak_db) {
+                Some(Counted::Unrecognised) => guard != Guard::Open,
+                Some(Counted::NearSpeech) => guard == Guard::ClosedByStopped,
+                None => false,
+            };
+            if counts {
+                span = Some(span.map_or((centre, centre), |(from, _)| (from, centre)));
+            }
+        }
+        span
+    }
+
+    /// How the guard counts a frame centred on sample `centre` at `level` (dB), before
+    /// a new sound that peaks at `peak_db`: none when it holds no sound over the room,
+    /// lies `guard_db` under the new sound or a recognised sound covers it.
+    fn counted(&self, centre: u64, level: f32, peak_db: f32) -> Option<Counted> {
+        if level <= SILENT_DB
+            || level < peak_db - self.params.guard_db
+            || self.recognised_at(centre)
+        {
+            None
+        } else if self.near_speech_at(centre) {
+            Some(Counted::NearSpeech)
+        } else {
+            Some(Counted::Unrecognised)
+        }
+    }
+}
+
+/// A frame of sound the guard counts.
+enum Counted {
+    Unrecognised,
+    /// Covered by a stopped sound near speech ([`Context::stopped`]).
+    NearSpeech,
 }
 
 /// The speech guard's judgement of the sound before an onset.
@@ -399,6 +439,25 @@ mod tests {
         assert!(!closed(&c, frames(0, 650, SILENT_DB), SILENT_DB));
         assert!(!closed(&c, frames(0, 650, SILENT_DB), SILENT_DB + 5.0));
         assert!(closed(&c, frames(0, 200, SILENT_DB + 1.0), SILENT_DB + 5.0));
+    }
+
+    /// What closed the guard is the sound it counted: here 250 ms of it, of which
+    /// the 100 ms a recognised sound covers and the frames 10 dB under the new sound do
+    /// not count.
+    #[test]
+    fn the_sound_that_closed_the_guard_spans_the_frames_it_counted() {
+        let mut c = context();
+        c.fired_impulse(0, 99, -20.0, 99);
+        let before = || frames(0, 300, -25.0).chain(frames(300, 50, -31.0));
+        assert_eq!(c.guard(before(), -20.0), Guard::Closed);
+        assert_eq!(
+            c.guard_sound(before(), -20.0, Guard::Closed),
+            Some((100, 299))
+        );
+        assert_eq!(
+            c.guard_sound(frames(0, 100, -25.0), -20.0, Guard::Open),
+            None
+        );
     }
 
     #[test]

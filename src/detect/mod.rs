@@ -35,7 +35,7 @@ use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 use background::BackgroundModel;
 pub use gates::Outcome;
-pub use spectral::{AlikePair, MatchedBy, OnsetRecord, SpectralMatcher, Wait};
+pub use spectral::{AlikePair, MatchedBy, OnsetRecord, SoundSpan, SpectralMatcher, Wait};
 pub use waveform::WaveformMatcher;
 
 /// The seed of the stages' own noise ([`white_noise`]).

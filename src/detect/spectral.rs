@@ -143,6 +143,8 @@ struct FirstLook {
     best: usize,
     context: Evidence,
     early: f64,
+    /// Its peak level, dB of sound, as the speech guard judges it.
+    peak: f32,
     rise_peak: f32,
     /// The speech guard's judgement of the sound before it.
     guard: Guard,
@@ -484,6 +486,21 @@ pub struct OnsetRecord {
     /// template or a kept instance.
     pub matched_by: Option<MatchedBy>,
     pub outcome: Outcome,
+    /// The sound that the stage which decided held against it: for `speech_guard`, the
+    /// sound no pattern recognised that closed the guard (the first and last of its
+    /// frames counted); for `continuation`, the impulse whose own later sound it is
+    /// (its onset to its take's end); for `held_continues`, the held sound going on
+    /// (its begin to the decision); for `same_onset`, the onset that fired.
+    pub because_of: Option<SoundSpan>,
+}
+
+/// A stretch of the stream, seconds ([`OnsetRecord::because_of`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SoundSpan {
+    #[serde(serialize_with = "super::seconds")]
+    pub from: f64,
+    #[serde(serialize_with = "super::seconds")]
+    pub to: f64,
 }
 
 /// Why the choice of an onset's pattern waited for more of its sound
@@ -545,6 +562,7 @@ impl OnsetRecord {
             waited_for: None,
             matched_by: None,
             outcome,
+            because_of: None,
         }
     }
 }
@@ -572,6 +590,8 @@ impl PatternScore {
 #[derive(Clone, Copy)]
 struct FiredImpulse {
     template: usize,
+    /// Its event's onset (where it was dated) to its take's end, samples.
+    span: (u64, u64),
     onset_frame: u64,
     strength: f64,
 }
@@ -1188,7 +1208,8 @@ impl SpectralMatcher {
                     .is_some_and(|last| time_sample < last + self.min_gap_samples)
             {
                 self.pending.remove(0);
-                self.explain_unscored(time_sample, Outcome::SameOnset);
+                let fired = self.last_fired.map(|t| (t, t));
+                self.explain_unscored(time_sample, Outcome::SameOnset, fired);
                 continue;
             }
             if self.frame_count <= frame + (windows * self.decision_frames + MAX_SHIFT) as u64 {
@@ -1203,14 +1224,50 @@ impl SpectralMatcher {
         }
     }
 
-    /// Records an onset that was not scored, for `--explain`.
-    fn explain_unscored(&mut self, time_sample: u64, outcome: Outcome) {
+    /// Records an onset that was not scored, for `--explain`, and the samples of the
+    /// sound held against it ([`OnsetRecord::because_of`]).
+    fn explain_unscored(
+        &mut self,
+        time_sample: u64,
+        outcome: Outcome,
+        because_of: Option<(u64, u64)>,
+    ) {
         let (time, decided_at) = (
             time_sample as f64 / self.rate,
             self.received as f64 / self.rate,
         );
+        let because_of = because_of.map(|span| self.sound_span(span));
         if let Some(records) = &mut self.explain {
-            records.push(OnsetRecord::unscored(time, decided_at, outcome));
+            records.push(OnsetRecord {
+                because_of,
+                ..OnsetRecord::unscored(time, decided_at, outcome)
+            });
+        }
+    }
+
+    /// Samples `from..=to` as seconds of stream.
+    fn sound_span(&self, (from, to): (u64, u64)) -> SoundSpan {
+        SoundSpan {
+            from: from as f64 / self.rate,
+            to: to as f64 / self.rate,
+        }
+    }
+
+    /// The samples of the sound that the stage which decided `outcome` for the onset at
+    /// `time_sample` held against it ([`OnsetRecord::because_of`]); `peak` and `guard`
+    /// as its first look found them.
+    fn because_of(
+        &self,
+        outcome: Outcome,
+        time_sample: u64,
+        peak: f32,
+        guard: Guard,
+    ) -> Option<(u64, u64)> {
+        match outcome {
+            Outcome::SpeechGuard => self.guard_sound(time_sample, peak, guard),
+            Outcome::Continuation => self.last_impulse.map(|last| last.span),
+            Outcome::HeldContinues => self.held.current().map(|h| (h.begin_sample, self.received)),
+            _ => None,
         }
     }
 
@@ -1234,6 +1291,7 @@ impl SpectralMatcher {
             best: mut pi,
             mut context,
             early,
+            peak,
             rise_peak,
             guard,
         } = first_look;
@@ -1327,6 +1385,9 @@ impl SpectralMatcher {
                 waited_for,
                 matched_by: Some(self.pattern_scores[pi].matched_by),
                 outcome,
+                because_of: self
+                    .because_of(outcome, time_sample, peak, guard)
+                    .map(|span| self.sound_span(span)),
             };
             if let Some(records) = &mut self.explain {
                 records.push(record);
@@ -1407,6 +1468,7 @@ impl SpectralMatcher {
         }
         self.last_impulse = (kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
+            span: (began, time_sample + take_length),
             onset_frame,
             strength,
         });
@@ -1536,6 +1598,7 @@ impl SpectralMatcher {
             best,
             context,
             early,
+            peak,
             rise_peak,
             guard,
         })
@@ -1960,18 +2023,32 @@ impl SpectralMatcher {
     /// The speech guard's judgement ([`Context::guard`]) of the `speech_guard_seconds`
     /// before an onset (up to 5 ms before it), near the new sound's `peak` (dB): whether
     /// the onset is part of a longer unrecognised sound, such as a consonant inside
-    /// speech. The frames are those whose whole window lies in that span.
+    /// speech.
     fn guard(&self, time_sample: u64, peak: f32) -> Guard {
+        self.context.guard(self.guard_frames(time_sample), peak)
+    }
+
+    /// The frames the speech guard judges before the onset at `time_sample`, as (centre
+    /// sample, level dB): those whose whole window lies in the `speech_guard_seconds`
+    /// before it, up to 5 ms before it.
+    fn guard_frames(&self, time_sample: u64) -> impl Iterator<Item = (u64, f32)> + '_ {
         let cap = self.frame_capacity as u64;
         let from = time_sample.saturating_sub(self.guard_samples());
         let to = self.quiet_before_span(time_sample).1;
-        let frames = self.frames_inside(from, to).map(|f| {
+        self.frames_inside(from, to).map(move |f| {
             (
                 self.analyzer.frame_centre(f),
                 self.levels[(f % cap) as usize],
             )
-        });
-        self.context.guard(frames, peak)
+        })
+    }
+
+    /// The first and last samples (frame centres) of the sound that closed the speech
+    /// guard before the onset at `time_sample`, which judged it `guard`
+    /// ([`Context::guard_sound`]).
+    fn guard_sound(&self, time_sample: u64, peak: f32, guard: Guard) -> Option<(u64, u64)> {
+        self.context
+            .guard_sound(self.guard_frames(time_sample), peak, guard)
     }
 
     /// Feeds frame `f` to the stage that follows a held sound the guard stopped; its
