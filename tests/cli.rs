@@ -1091,3 +1091,73 @@ fn commands_on_a_config_of_performers_take_one_by_name() {
         ),
     ]);
 }
+
+/// The README's quick start is what a stranger checks first: its printed lines (every
+/// impulse, and each held sound's end) and its JSON excerpt are what the bundled example
+/// gives with the present build.
+#[test]
+fn the_readme_quick_start_shows_what_the_example_gives() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let quoted: Vec<&str> = readme
+        .lines()
+        .skip_while(|l| !l.starts_with("bash scripts/example.sh"))
+        .skip_while(|l| !l.trim_start().starts_with("0.400 s"))
+        .take_while(|l| l.trim() != "...")
+        .collect();
+    assert!(quoted.len() >= 5, "no printed events in the quick start");
+    let config = onomato::Config::load(&root().join("config/onomato.toml")).unwrap();
+    let analysis =
+        onomato::analyze::analyze_file(&root().join("examples/beat.wav"), &config).unwrap();
+    let printed: Vec<String> = analysis
+        .events
+        .iter()
+        .filter_map(|e| {
+            onomato::output::print::format_event(None, e, true, onomato::output::PrintMode::Text)
+        })
+        .map(|l| l.trim_end().to_string())
+        .collect();
+    for line in quoted.iter().filter(|l| !l.contains(" begin ")) {
+        assert!(
+            printed.iter().any(|p| p == line),
+            "the README prints\n{line}\nthe example gives\n{}",
+            printed.join("\n")
+        );
+    }
+    // The JSON excerpt: each record it shows whole (events by id, bounces by event) is
+    // the example's.
+    let out = onomato(&[
+        "analyze",
+        "examples/beat.wav",
+        "--config",
+        "config/onomato.toml",
+        "--bounce",
+    ]);
+    let doc: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let excerpt = readme
+        .split("```json")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("a JSON excerpt");
+    let mut shown = 0;
+    for (start, _) in excerpt.match_indices("{\"") {
+        let Some(len) = excerpt[start..].find('}') else {
+            continue;
+        };
+        let Ok(record) = serde_json::from_str::<Value>(&excerpt[start..=start + len]) else {
+            continue;
+        };
+        let (list, key) = if record.get("launch_velocity").is_some() {
+            ("bounce", "event")
+        } else {
+            ("events", "id")
+        };
+        let given = doc[list]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r[key] == record[key]);
+        assert_eq!(given, Some(&record), "the README shows {record}");
+        shown += 1;
+    }
+    assert!(shown >= 3, "{excerpt}");
+}
