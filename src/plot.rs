@@ -4,7 +4,8 @@
 //! in figure 2 of the paper. With the spectral method, which scores a sound only at its
 //! onset, each panel shows the score of each decided event as a dot, and every onset
 //! that did not fire as a ring at its best score, under the pattern it resembled most,
-//! with the name of the gate that stopped it (as `--explain` lists them) and, as a thin
+//! with the name of the gate that stopped it (as `--explain` lists them; once for a run
+//! of rings closer than the name is wide) and, as a thin
 //! line at its height, the sound that gate held against it (the unrecognised sound that
 //! closed the speech guard, the impulse it continues...); the waveform panel marks
 //! those onsets with a grey line.
@@ -24,6 +25,9 @@ const WIDTH: u32 = 1400;
 const WAVE_HEIGHT: u32 = 220;
 const PANEL_HEIGHT: u32 = 130;
 const BOTTOM: u32 = 40;
+/// The width of a gate's name under a ring, pixels (the longest, "below_threshold", in
+/// 10-pixel sans-serif).
+const LABEL_PIXELS: f64 = 80.0;
 
 /// Colours of the patterns, in order (repeated beyond ten).
 const PALETTE: [RGBColor; 10] = [
@@ -271,12 +275,39 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
                         PathElement::new(vec![(x, y), (x + 20, y)], c.mix(0.5).stroke_width(2))
                     });
             }
+            // A name over its ring, or under it where that would overprint a name drawn in
+            // this panel; none where both would, or where the name it would overprint is
+            // its own: a run of rings within a name's width (the syllables of a word, the
+            // onsets inside a held sound) is named once, every ring still drawn.
+            let label_seconds = duration * LABEL_PIXELS / f64::from(WIDTH);
+            let mut labels: Vec<(&'static str, (f64, f64))> = Vec::new();
+            for o in &rejected {
+                let (t, y) = at(o);
+                let name = o.outcome.as_str();
+                let near =
+                    |labels: &[(&'static str, (f64, f64))], y: f64| -> Option<&'static str> {
+                        labels
+                            .iter()
+                            .rev()
+                            .take_while(|(_, (lt, _))| t - lt < label_seconds)
+                            .find(|(_, (_, ly))| (y - ly).abs() < 0.12)
+                            .map(|(other, _)| *other)
+                    };
+                let over = (y + 0.08).min(1.0);
+                let under = y - 0.1;
+                match (near(&labels, over), near(&labels, under)) {
+                    (None, _) => labels.push((name, (t, over))),
+                    (Some(other), None) if other != name => labels.push((name, (t, under))),
+                    _ => {}
+                }
+            }
             let style = ("sans-serif", 10).into_font().color(&BLACK.mix(0.7));
             chart
-                .draw_series(rejected.iter().map(|o| {
-                    let (t, y) = at(o);
-                    Text::new(o.outcome.as_str(), (t, (y + 0.08).min(1.0)), style.clone())
-                }))
+                .draw_series(
+                    labels
+                        .into_iter()
+                        .map(|(name, at)| Text::new(name, at, style.clone())),
+                )
                 .map_err(|e| fail(&e))?;
         }
         chart

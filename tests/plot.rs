@@ -112,7 +112,8 @@ fn the_spectral_plot_shows_the_score_of_each_decision_and_why_other_onsets_did_n
         );
     }
     // Every onset that did not fire, as `--explain` lists it in the same run, is a
-    // ring under the pattern it resembled most, labelled with the gate that stopped it.
+    // ring under the pattern it resembled most, labelled with the gate that stopped it
+    // (once for a run of rings closer than the label is wide).
     let stopped: Vec<&serde_json::Value> = json["onsets"]
         .as_array()
         .unwrap()
@@ -126,8 +127,8 @@ fn the_spectral_plot_shows_the_score_of_each_decision_and_why_other_onsets_did_n
     for o in &stopped {
         let outcome = o["outcome"].as_str().unwrap();
         let labels = t.iter().filter(|x| *x == outcome).count();
-        let expected = stopped.iter().filter(|p| p["outcome"] == outcome).count();
-        assert_eq!(labels, expected, "labels '{outcome}'");
+        let rings = stopped.iter().filter(|p| p["outcome"] == outcome).count();
+        assert!((1..=rings).contains(&labels), "labels '{outcome}'");
     }
     let patterns_with_rings = ["tick", "pop", "boom", "hoo"]
         .iter()
