@@ -25,6 +25,13 @@ const WIDTH: u32 = 1400;
 const WAVE_HEIGHT: u32 = 220;
 const PANEL_HEIGHT: u32 = 130;
 const BOTTOM: u32 = 40;
+/// The column right of the recording's time, in every panel, that holds the panel's
+/// legend, pixels: beside the scores, not over them. The time axis runs on under it,
+/// unlabelled.
+const LEGEND_PIXELS: u32 = 290;
+/// A panel's margin and the width of its score axis, pixels.
+const MARGIN: u32 = 8;
+const Y_LABELS: u32 = 60;
 /// The width of a gate's name under a ring, pixels (the longest, "below_threshold", in
 /// 10-pixel sans-serif).
 const LABEL_PIXELS: f64 = 80.0;
@@ -79,7 +86,17 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
     let patterns: Vec<&(std::sync::Arc<str>, f64)> = analysis.thresholds.iter().collect();
     let height = WAVE_HEIGHT + PANEL_HEIGHT * patterns.len() as u32 + BOTTOM;
     let duration = analysis.duration.max(1e-3);
-    let root = SVGBackend::new(path, (WIDTH, height)).into_drawing_area();
+    let root = SVGBackend::new(path, (WIDTH + LEGEND_PIXELS, height)).into_drawing_area();
+    // The time axis of every panel, reaching on under the legend column.
+    let plotted = f64::from(WIDTH + LEGEND_PIXELS - 2 * MARGIN - Y_LABELS);
+    let axis_end = duration * plotted / (plotted - f64::from(LEGEND_PIXELS));
+    let time_label = |t: &f64| {
+        if *t <= duration * (1.0 + 1e-9) {
+            format!("{t:.1}")
+        } else {
+            String::new()
+        }
+    };
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let (wave_area, rest) = root.split_vertically(WAVE_HEIGHT);
     let colour = |i: usize| PALETTE[i % PALETTE.len()];
@@ -90,10 +107,10 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
         let peak = samples.iter().fold(0.0f32, |m, x| m.max(x.abs())).max(1e-6);
         let mut chart = ChartBuilder::on(&wave_area)
             .caption("recording, with the detected events", ("sans-serif", 18))
-            .margin(8)
+            .margin(MARGIN)
             .x_label_area_size(0)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..duration, -(peak as f64)..peak as f64)
+            .y_label_area_size(Y_LABELS)
+            .build_cartesian_2d(0.0..axis_end, -(peak as f64)..peak as f64)
             .map_err(|e| fail(&e))?;
         chart
             .configure_mesh()
@@ -155,11 +172,11 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
         let last = i + 1 == patterns.len();
         let mut builder = ChartBuilder::on(area);
         builder
-            .margin(8)
-            .y_label_area_size(60)
+            .margin(MARGIN)
+            .y_label_area_size(Y_LABELS)
             .x_label_area_size(if last { BOTTOM } else { 0 });
         let mut chart = builder
-            .build_cartesian_2d(0.0..duration, 0.0..1.05)
+            .build_cartesian_2d(0.0..axis_end, 0.0..1.05)
             .map_err(|e| fail(&e))?;
         let mut mesh = chart.configure_mesh();
         mesh.disable_x_mesh()
@@ -167,7 +184,9 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
             .y_max_light_lines(0)
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 14))
-            .y_desc(format!("{name}: match"));
+            .y_desc(format!("{name}: match"))
+            .x_labels(15)
+            .x_label_formatter(&time_label);
         if last {
             mesh.x_desc("time (s)");
         }
