@@ -135,16 +135,18 @@ struct PatternInfo {
 
 /// What an onset's first window showed ([`SpectralMatcher::first_look`]): its best
 /// pattern, the evidence that does not depend on the pattern, the energy of its
-/// decision window in the bands compared and its peak level (dB of sound, by the quiet-before rise's measure:
-/// where its span starts to follow its sound). Kept while its decision waits for more
-/// windows, so that every gate judges the first window once.
+/// decision window in the bands compared, and its peak level by two measures. Kept
+/// while its decision waits for more windows, so that every gate judges the first
+/// window once.
 #[derive(Clone, Copy)]
 struct FirstLook {
     best: usize,
     context: Evidence,
     early: f64,
-    /// Its peak level, dB of sound, as the speech guard judges it.
+    /// Its peak level, dB of sound, as the speech guard judges it...
     peak: f32,
+    /// ...and by the quiet-before rise's measure (where its span starts to follow its
+    /// sound).
     rise_peak: f32,
     /// The speech guard's judgement of the sound before it.
     guard: Guard,
