@@ -8,6 +8,10 @@
 //! command and its output formats), [`eval`] (scoring against an annotation),
 //! [`input`] (the microphone and replayed files, into a ring; `listen` and `record`),
 //! [`daemon`] and [`output`] (`listen`'s threads), [`status`] (the counters they share).
+//!
+//! The detector's stages are private modules that its public types' documentation links
+//! to: `cargo doc --document-private-items` renders those links.
+#![allow(rustdoc::private_intra_doc_links)]
 
 pub mod analyze;
 pub mod audio;

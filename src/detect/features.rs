@@ -349,11 +349,7 @@ impl Cepstrum {
         (self.bands < BANDS).then(|| band_top_hz(rate, self.bands - 1))
     }
 
-    /// The features (unit norm) that `full`, feature vectors one after the other of
-    /// spectra pooled over every band, become when only this cepstrum's bands are
-    /// compared: each spectrum is recovered from them (up to its level and scale, which
-    /// no feature keeps) and taken through this cepstrum. The same features when every
-    /// band is compared. For models pooled over every band (the built-in background).
+    /// [`Self::refeature_into`], into a new vector.
     #[cfg(test)]
     pub(super) fn refeature(&self, full: &[f32]) -> Vec<f32> {
         let mut out = vec![0.0f32; full.len()];
@@ -361,7 +357,12 @@ impl Cepstrum {
         out
     }
 
-    /// [`Self::refeature`] into `out`, as long as `full`.
+    /// The features (unit norm) that `full`, feature vectors one after the other of
+    /// spectra pooled over every band, become when only this cepstrum's bands are
+    /// compared, into `out`, as long as `full`: each spectrum is recovered from them (up
+    /// to its level and scale, which no feature keeps) and taken through this cepstrum.
+    /// The same features when every band is compared. For models pooled over every band
+    /// (the built-in background).
     pub(super) fn refeature_into(&self, full: &[f32], out: &mut [f32]) {
         if self.bands == BANDS {
             out.copy_from_slice(full);
