@@ -267,6 +267,44 @@ fn strength_through_a_narrower_input_than_the_take_follows_the_gain() {
     }
 }
 
+/// The same for a held sound: a bright "chhh" from a 44.1 kHz recording, held at two
+/// gains through the working rate, a 16 kHz and an 8 kHz input, is as strong as its gain
+/// each time.
+#[test]
+fn a_held_sound_through_a_narrower_input_than_its_take_is_as_strong_as_its_gain() {
+    let settings = spectral();
+    let at_44k = resample_clip(&chhh(0.5, 1), RATE, 44_100).unwrap();
+    let take = resample_clip(&at_44k, 44_100, RATE).unwrap();
+    let gains = [1.0f32, 0.5];
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    for (i, g) in gains.iter().enumerate() {
+        rec.extend(chhh(0.6, 10 + i as u64).iter().map(|v| v * g));
+        rec.extend(vec![0.0; samples_for(0.4, RATE)]);
+    }
+    add_noise(&mut rec, 0.0002, 4);
+    // Performed through the take's microphone.
+    let rec = resample_clip(&resample_clip(&rec, RATE, 44_100).unwrap(), 44_100, RATE).unwrap();
+    for input_rate in [RATE, 16_000, 8_000] {
+        let input = resample_clip(&rec, RATE, input_rate).unwrap();
+        let pattern = Pattern::from_samples(
+            "chhh",
+            PatternKind::Continuous,
+            vec![take.clone()],
+            &settings,
+        );
+        let mut det = Detector::new(vec![pattern.unwrap()], &settings, input_rate).unwrap();
+        let events = detect_in_blocks(&mut det, &input, 256);
+        let strengths: Vec<f64> = events.iter().map(|e| e.strength).collect();
+        assert_eq!(events.len(), gains.len(), "{input_rate} Hz: {events:#?}");
+        for (s, g) in strengths.iter().zip(gains) {
+            assert!(
+                (0.8..1.25).contains(&(s / f64::from(g))),
+                "{input_rate} Hz, gain {g}: {strengths:?}"
+            );
+        }
+    }
+}
+
 /// A held "chhh": bright noise with 10 ms fades.
 fn chhh(seconds: f64, seed: u64) -> Vec<f32> {
     let x = brighten(&noise_burst(RATE, seconds, 1e9, seed));

@@ -408,6 +408,8 @@ pub struct SpectralMatcher {
     separating_scratch: Separating,
     /// A take's pooled power over several windows (scratch).
     take_power: Vec<f32>,
+    /// A held sound's mean frame, for its strength (scratch).
+    held_mean_frame: [f32; BANDS],
     /// The features of every onset that stands out of its quiet, when building a
     /// background model ([`background_model`]).
     collected: Option<Vec<f32>>,
@@ -837,6 +839,7 @@ impl SpectralMatcher {
             ),
             max_windows: 1,
             take_power: vec![0.0; BANDS],
+            held_mean_frame: [0.0; BANDS],
             collected: None,
             kinds,
             carried_top_hz: carried,
@@ -1911,6 +1914,42 @@ impl SpectralMatcher {
         energy * share_in_bands(power, self.analyzer.cepstrum.bands())
     }
 
+    /// The share in the bands compared ([`share_in_bands`]) of the power of a mean frame
+    /// (dB per band).
+    fn share_of_mean_frame(&self, mean_db: &[f32]) -> f64 {
+        let mut power = [0.0f32; BANDS];
+        for (p, db) in power.iter_mut().zip(mean_db) {
+            *p = 10f32.powf(db / 10.0);
+        }
+        share_in_bands(&power, self.analyzer.cepstrum.bands())
+    }
+
+    /// The mean frame (dB per band) of the frames still in the ring centred in samples
+    /// `lo..hi` (the one nearest `lo` when none is), into `held_mean_frame`.
+    fn mean_frame_between(&mut self, lo: u64, hi: u64) {
+        let cap = self.frame_capacity as u64;
+        let newest = self.frame_count.saturating_sub(1);
+        let oldest = self.frame_count.saturating_sub(cap);
+        let first = self.analyzer.frame_centred_on(lo).clamp(oldest, newest);
+        let last = self
+            .analyzer
+            .frame_centred_on(hi.saturating_sub(1))
+            .clamp(first, newest);
+        self.held_mean_frame.fill(0.0);
+        for f in first..=last {
+            let slot = (f % cap) as usize;
+            for (m, x) in self
+                .held_mean_frame
+                .iter_mut()
+                .zip(&self.frames[slot * BANDS..(slot + 1) * BANDS])
+            {
+                *m += x;
+            }
+        }
+        let count = (last - first + 1) as f32;
+        self.held_mean_frame.iter_mut().for_each(|m| *m /= count);
+    }
+
     /// The energy of take `take`'s decision window in the bands compared.
     fn take_energy(&self, take: usize) -> f64 {
         let t = &self.templates[take];
@@ -2165,18 +2204,24 @@ impl SpectralMatcher {
         // Mean power over the held sound (its most recent half second when longer).
         let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
         let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
+        // Both powers in the bands compared, as an impulse's strength is: each by its
+        // share there in its mean frame (the sound's over the same span, the takes' after
+        // their onsets).
+        self.mean_frame_between(lo, hi);
+        let power = power * self.share_of_mean_frame(&self.held_mean_frame);
+        let info = &self.patterns[h.pattern];
+        let pattern_power = info.power * self.share_of_mean_frame(info.mean_frame.as_slice());
         let samples = &self.samples;
         let pitch = self
             .pitch
             .estimate(lo, hi, |n| samples[ring_slot(samples, n)]);
-        let info = &self.patterns[h.pattern];
         out.push(Event {
             id: 0,
             pattern: info.name.clone(),
             kind: PatternKind::Continuous,
             time: h.begin_sample as f64 / self.rate,
             end: Some(end_sample as f64 / self.rate),
-            strength: (power / info.power.max(1e-12)).sqrt(),
+            strength: (power / pattern_power.max(1e-12)).sqrt(),
             score: f64::from(h.score),
             emitted_at: self.received as f64 / self.rate,
             pitch,
