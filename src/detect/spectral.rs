@@ -323,8 +323,8 @@ pub struct SpectralMatcher {
     /// Ring of log-mel frames, `BANDS` each.
     frames: Vec<f32>,
     /// Per frame: the sound in it over the room's noise
-    /// ([`super::levels::FrameLevels::sound`]), for the speech guard and a held sound's
-    /// strength.
+    /// ([`super::levels::FrameLevels::sound`]), for the speech guard and for how long a
+    /// held sound lasts.
     levels: Vec<f32>,
     /// Per frame: the same over the noise of whole periods of mains hum
     /// ([`super::levels::FrameLevels::rise`]), for the quiet-before rise and the spans of
