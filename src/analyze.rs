@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::Config;
 use crate::detect::waveform::TakeTrace;
-use crate::detect::{DetectError, Detector, Event, MatchedBy, OnsetRecord};
+use crate::detect::{DetectError, Detector, Event, HeldEndRecord, MatchedBy, OnsetRecord};
 use crate::pattern::{self, PatternError};
 use crate::solver::{self, Contact};
 
@@ -44,8 +44,10 @@ pub struct Analysis {
     pub thresholds: Vec<(std::sync::Arc<str>, f64)>,
     /// The detector's working rate (of the score traces).
     pub working_rate: u32,
-    /// Spectral method, when asked for: every onset considered and what became of it.
+    /// Spectral method, when asked for: every onset considered and what became of it...
     pub onsets: Option<Vec<OnsetRecord>>,
+    /// ...and how each held sound that fired ended.
+    pub held_ends: Option<Vec<HeldEndRecord>>,
     /// Spectral method: the top of the bands compared (Hz) when the recording or the
     /// takes carry less than the full band.
     pub compared_top_hz: Option<f64>,
@@ -153,6 +155,7 @@ pub fn analyze_file_with(
         sample_rate: source.sample_rate(),
         score_traces: detector.take_score_trace(),
         onsets: detector.take_explain(),
+        held_ends: detector.take_held_ends(),
         compared_top_hz: detector.compared_top_hz(),
         thresholds,
         working_rate: config.detector.sample_rate,
@@ -177,25 +180,60 @@ struct JsonOutput<'a> {
     bounce: Option<&'a [Contact]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     onsets: Option<&'a [OnsetRecord]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    held_ends: Option<&'a [HeldEndRecord]>,
 }
 
-/// Writes `{"events":[...]}` (and `"bounce":[...]`, `"onsets":[...]` when given) and a
-/// newline.
+/// What `--explain` adds to the JSON output: every onset considered, and how each held
+/// sound ended.
+#[derive(Debug, Clone, Copy)]
+pub struct Explained<'a> {
+    pub onsets: &'a [OnsetRecord],
+    pub held_ends: &'a [HeldEndRecord],
+}
+
+/// Writes `{"events":[...]}` (and `"bounce":[...]`, `"onsets":[...]` and
+/// `"held_ends":[...]` when given) and a newline.
 pub fn write_json(
     out: &mut dyn Write,
     events: &[Event],
     bounce: Option<&[Contact]>,
-    onsets: Option<&[OnsetRecord]>,
+    explained: Option<Explained>,
 ) -> std::io::Result<()> {
     serde_json::to_writer(
         &mut *out,
         &JsonOutput {
             events,
             bounce,
-            onsets,
+            onsets: explained.map(|e| e.onsets),
+            held_ends: explained.map(|e| e.held_ends),
         },
     )?;
     writeln!(out)
+}
+
+/// Writes one line per held sound that fired: its pattern, begin and end, and why it
+/// ended (`--explain`, on stderr, after the onsets).
+pub fn write_held_ends(out: &mut dyn Write, ends: &[HeldEndRecord]) -> std::io::Result<()> {
+    if ends.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{:<12} {:>9}  {:>9}  ended",
+        "held sound", "begin s", "end s"
+    )?;
+    for r in ends {
+        writeln!(
+            out,
+            "{:<12} {:>9.4}  {:>9.4}  {}",
+            r.pattern,
+            r.time,
+            r.end,
+            r.ended_by.as_str()
+        )?;
+    }
+    Ok(())
 }
 
 /// Writes one line per onset considered: its time, the two patterns it resembled most

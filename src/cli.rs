@@ -448,8 +448,17 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
             );
         }
         match &analysis.onsets {
-            Some(onsets) => analyze::write_explain(&mut std::io::stderr().lock(), onsets)
-                .context("cannot write to stderr")?,
+            Some(onsets) => {
+                let mut err = std::io::stderr().lock();
+                analyze::write_explain(&mut err, onsets)
+                    .and_then(|()| {
+                        analyze::write_held_ends(
+                            &mut err,
+                            analysis.held_ends.as_deref().unwrap_or_default(),
+                        )
+                    })
+                    .context("cannot write to stderr")?
+            }
             None => tracing::warn!(
                 "--explain lists the onsets of the spectral method; the waveform method has none"
             ),
@@ -462,8 +471,13 @@ fn run_analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
             let contacts = args
                 .bounce
                 .then(|| analyze::bounce(&analysis.events, &config));
-            let onsets = analysis.onsets.as_deref().filter(|_| args.explain);
-            analyze::write_json(&mut out, &analysis.events, contacts.as_deref(), onsets)
+            let explained = match (&analysis.onsets, &analysis.held_ends) {
+                (Some(onsets), Some(held_ends)) if args.explain => {
+                    Some(analyze::Explained { onsets, held_ends })
+                }
+                _ => None,
+            };
+            analyze::write_json(&mut out, &analysis.events, contacts.as_deref(), explained)
         }
         Format::Csv => analyze::write_csv(&mut out, &analysis.events),
     }

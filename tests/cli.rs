@@ -958,6 +958,24 @@ fn explain_lists_every_onset_with_what_became_of_it() {
         }
     }
     assert!(continued > 0, "no onset continued an impulse: {onsets:?}");
+    // How each held sound ended: one record per held event, its span the event's.
+    let held: Vec<&Value> = events
+        .iter()
+        .filter(|e| e["kind"] == "continuous")
+        .collect();
+    let ends = doc["held_ends"].as_array().expect("a held_ends array");
+    assert_eq!(ends.len(), held.len(), "{ends:?}");
+    for (e, end) in held.iter().zip(ends) {
+        assert_eq!(
+            (&end["pattern"], &end["time"], &end["end"]),
+            (&e["pattern"], &e["time"], &e["end"])
+        );
+        assert!(
+            ["faded", "unlike", "replaced", "stream_ended"]
+                .contains(&end["ended_by"].as_str().unwrap()),
+            "{end}"
+        );
+    }
     // A repeated sound is soon matched by what tracking kept of it, not only the takes.
     assert!(
         onsets

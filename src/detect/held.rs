@@ -3,7 +3,8 @@
 //! (the centred, unit-norm mean frame of the takes after their onsets) and stays within
 //! `drop_db` of its loudest frame; it ends after `gap_seconds` of frames that do not.
 //! Knows frames and levels only: the matcher begins a held sound, feeds it every frame
-//! and turns the sound that ended into an event (with the pitch stage's estimate).
+//! and turns the sound that ended into an event (with the pitch stage's estimate). A
+//! sound that ends says why ([`HeldEnd`], for `analyze --explain`).
 //!
 //! Runs on the detector thread, inside the spectral matcher; allocates nothing.
 
@@ -37,6 +38,32 @@ impl Default for HeldParams {
     }
 }
 
+/// Why a held sound ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HeldEnd {
+    /// Its frames fell `drop_db` under its loudest.
+    Faded,
+    /// Its frames stopped resembling its pattern's sustained spectrum.
+    Unlike,
+    /// A held sound began (of any pattern: one held sound at a time).
+    Replaced,
+    /// The stream ended while it went on.
+    StreamEnded,
+}
+
+impl HeldEnd {
+    /// The name `--explain` prints.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Faded => "faded",
+            Self::Unlike => "unlike",
+            Self::Replaced => "replaced",
+            Self::StreamEnded => "stream_ended",
+        }
+    }
+}
+
 /// A held sound going on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Held {
@@ -46,12 +73,23 @@ pub(super) struct Held {
     pub score: f32,
     loudest_db: f32,
     last_good_frame: u64,
+    /// Why the first frame after the last good one did not hold it.
+    first_miss: Option<HeldEnd>,
+    /// Once it has ended: why.
+    ended_by: Option<HeldEnd>,
 }
 
 impl Held {
     /// The last frame that held the sound.
     pub fn last_good_frame(&self) -> u64 {
         self.last_good_frame
+    }
+
+    /// Why it ended, once it has: the first way a frame after its last good one failed
+    /// to hold it (a fall of `drop_db` counts before a frame unlike its spectrum), a
+    /// held sound that began, or the stream's end.
+    pub fn ended_by(&self) -> Option<HeldEnd> {
+        self.ended_by
     }
 }
 
@@ -90,13 +128,16 @@ impl HeldStage {
         loudest_db: f32,
         frame: u64,
     ) -> Option<Held> {
-        self.current.replace(Held {
+        let going = self.current.replace(Held {
             pattern,
             begin_sample,
             score,
             loudest_db,
             last_good_frame: frame,
-        })
+            first_miss: None,
+            ended_by: None,
+        });
+        going.map(|h| h.ending(HeldEnd::Replaced))
     }
 
     /// Frame `f` (`frame_db`, its bands in dB, at `level_db`), against the going
@@ -112,14 +153,22 @@ impl HeldStage {
     ) -> Option<Held> {
         let h = self.current.as_mut()?;
         h.loudest_db = h.loudest_db.max(level_db);
-        let holds = sustain_similarity(frame_db, sustain)
-            >= continuous_threshold.max(self.params.min_similarity)
-            && level_db >= h.loudest_db - self.params.drop_db;
-        if holds {
+        let alike = sustain_similarity(frame_db, sustain)
+            >= continuous_threshold.max(self.params.min_similarity);
+        let loud = level_db >= h.loudest_db - self.params.drop_db;
+        if alike && loud {
             h.last_good_frame = f;
+            h.first_miss = None;
+        } else if h.first_miss.is_none() {
+            h.first_miss = Some(if loud {
+                HeldEnd::Unlike
+            } else {
+                HeldEnd::Faded
+            });
         }
         if f > h.last_good_frame + self.gap_frames {
-            self.current.take()
+            let miss = h.first_miss.unwrap_or(HeldEnd::Unlike);
+            self.current.take().map(|h| h.ending(miss))
         } else {
             None
         }
@@ -127,7 +176,16 @@ impl HeldStage {
 
     /// Ends the going sound (the stream ended, or the detector stops).
     pub fn end(&mut self) -> Option<Held> {
-        self.current.take()
+        self.current.take().map(|h| h.ending(HeldEnd::StreamEnded))
+    }
+}
+
+impl Held {
+    fn ending(self, why: HeldEnd) -> Self {
+        Self {
+            ended_by: Some(why),
+            ..self
+        }
     }
 }
 
@@ -177,12 +235,21 @@ mod tests {
         frames: &[(Vec<f32>, f32)],
         threshold: f32,
     ) -> Option<(u64, u64)> {
+        ended(stage, frames, threshold).map(|(at, h)| (at, h.last_good_frame()))
+    }
+
+    /// As [`run`], the sound that ended.
+    fn ended(
+        stage: &mut HeldStage,
+        frames: &[(Vec<f32>, f32)],
+        threshold: f32,
+    ) -> Option<(u64, Held)> {
         let sustain = shape(-3.0);
         stage.begin(0, 0, 0.9, frames[0].1, 0);
         for (i, (f, level)) in frames.iter().enumerate() {
             let at = i as u64 + 1;
             if let Some(h) = stage.follow(at, f, *level, &sustain, threshold) {
-                return Some((at, h.last_good_frame()));
+                return Some((at, h));
             }
         }
         None
@@ -194,7 +261,9 @@ mod tests {
         let gap = (0.030 / HOP) as u64;
         let mut frames = vec![(frame(-3.0, -20.0), -20.0); 100];
         frames.extend(vec![(frame(4.0, -20.0), -20.0); 50]);
-        assert_eq!(run(&mut stage, &frames, 0.3), Some((100 + gap + 1, 100)));
+        let (at, h) = ended(&mut stage, &frames, 0.3).expect("it ends");
+        assert_eq!((at, h.last_good_frame()), (100 + gap + 1, 100));
+        assert_eq!(h.ended_by(), Some(HeldEnd::Unlike));
         assert!(stage.current().is_none());
     }
 
@@ -204,8 +273,9 @@ mod tests {
         let mut frames = vec![(frame(-3.0, -10.0), -10.0); 40];
         // The same shape, 25 dB down: no longer the sound.
         frames.extend(vec![(frame(-3.0, -35.0), -35.0); 40]);
-        let (_, last) = run(&mut stage, &frames, 0.3).expect("it ends");
-        assert_eq!(last, 40);
+        let (_, h) = ended(&mut stage, &frames, 0.3).expect("it ends");
+        assert_eq!(h.last_good_frame(), 40);
+        assert_eq!(h.ended_by(), Some(HeldEnd::Faded));
         // 15 dB down, it goes on.
         let mut stage = HeldStage::new(HeldParams::default(), HOP);
         let mut frames = vec![(frame(-3.0, -10.0), -10.0); 40];
@@ -234,8 +304,11 @@ mod tests {
         assert_eq!(stage.begin(0, 100, 0.9, -20.0, 3), None);
         let ended = stage.begin(1, 900, 0.8, -20.0, 9).expect("the first one");
         assert_eq!((ended.pattern, ended.begin_sample), (0, 100));
+        assert_eq!(ended.ended_by(), Some(HeldEnd::Replaced));
         assert_eq!(stage.current().map(|h| h.pattern), Some(1));
-        assert_eq!(stage.end().map(|h| h.begin_sample), Some(900));
+        let last = stage.end().expect("the second one");
+        assert_eq!(last.begin_sample, 900);
+        assert_eq!(last.ended_by(), Some(HeldEnd::StreamEnded));
         assert_eq!(stage.end(), None);
     }
 

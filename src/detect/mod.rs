@@ -35,7 +35,10 @@ use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 use background::BackgroundModel;
 pub use gates::Outcome;
-pub use spectral::{AlikePair, MatchedBy, OnsetRecord, SoundSpan, SpectralMatcher, Wait};
+pub use held::HeldEnd;
+pub use spectral::{
+    AlikePair, HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, SpectralMatcher, Wait,
+};
 pub use waveform::WaveformMatcher;
 
 /// The seed of the stages' own noise ([`white_noise`]).
@@ -373,7 +376,8 @@ impl Detector {
     }
 
     /// Spectral method: keeps a record of every onset the detector considers and what
-    /// became of it, from now on (grows with the stream: for offline use only).
+    /// became of it, and of how every held sound that fired ended, from now on (grows
+    /// with the stream: for offline use only).
     pub fn enable_explain(&mut self) {
         if let Matcher::Spectral(m) = &mut self.matcher {
             m.enable_explain();
@@ -389,6 +393,21 @@ impl Detector {
         let mut records = m.take_explain()?;
         for r in &mut records {
             r.time += self.time_offset;
+            r.decided_at += self.time_offset;
+        }
+        Some(records)
+    }
+
+    /// Hands over the held sounds' ends and why each ended (see
+    /// [`Detector::enable_explain`]), their times on the stream's clock.
+    pub fn take_held_ends(&mut self) -> Option<Vec<spectral::HeldEndRecord>> {
+        let Matcher::Spectral(m) = &mut self.matcher else {
+            return None;
+        };
+        let mut records = m.take_held_ends()?;
+        for r in &mut records {
+            r.time += self.time_offset;
+            r.end += self.time_offset;
             r.decided_at += self.time_offset;
         }
         Some(records)

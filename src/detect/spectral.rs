@@ -91,7 +91,7 @@ use super::features::{
     Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
 use super::gates::{decide, Evidence, GateParams, Outcome};
-use super::held::{Held, HeldParams, HeldStage};
+use super::held::{Held, HeldEnd, HeldParams, HeldStage};
 use super::levels::{sound_level_db, LevelInput, Levels, StreamStart, SILENT_DB};
 use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
@@ -392,6 +392,8 @@ pub struct SpectralMatcher {
     best_instance: Vec<f32>,
     /// Every onset decided and what became of it, when asked for (offline).
     explain: Option<Vec<OnsetRecord>>,
+    /// Every held sound that fired and ended, and why, when asked for with `explain`.
+    held_ends: Option<Vec<HeldEndRecord>>,
     /// The sounds of speech, the room... that must never fire, as compared: the
     /// built-in model and the user's own ([`Self::add_background`]) through the
     /// cepstrum...
@@ -496,6 +498,21 @@ pub struct OnsetRecord {
     /// (its onset to its take's end); for `held_continues`, the held sound going on
     /// (its begin to the decision); for `same_onset`, the onset that fired.
     pub because_of: Option<SoundSpan>,
+}
+
+/// How a held sound that fired ended (`analyze --explain`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HeldEndRecord {
+    pub pattern: Arc<str>,
+    /// Its begin and end, seconds of stream, as its event has them.
+    #[serde(serialize_with = "super::seconds")]
+    pub time: f64,
+    #[serde(serialize_with = "super::seconds")]
+    pub end: f64,
+    /// When its end was decided.
+    #[serde(serialize_with = "super::seconds")]
+    pub decided_at: f64,
+    pub ended_by: HeldEnd,
 }
 
 /// A stretch of the stream, seconds ([`OnsetRecord::because_of`]).
@@ -826,6 +843,7 @@ impl SpectralMatcher {
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
+            held_ends: None,
             background: background_full.own_copy(),
             background_full,
             background_score: f32::NEG_INFINITY,
@@ -917,11 +935,17 @@ impl SpectralMatcher {
     /// Keeps a record of every onset from now on (grows with the stream: offline).
     pub fn enable_explain(&mut self) {
         self.explain.get_or_insert_with(Vec::new);
+        self.held_ends.get_or_insert_with(Vec::new);
     }
 
     /// Hands over the records kept since [`Self::enable_explain`].
     pub fn take_explain(&mut self) -> Option<Vec<OnsetRecord>> {
         self.explain.as_mut().map(std::mem::take)
+    }
+
+    /// Hands over the held sounds' ends kept since [`Self::enable_explain`].
+    pub fn take_held_ends(&mut self) -> Option<Vec<HeldEndRecord>> {
+        self.held_ends.as_mut().map(std::mem::take)
     }
 
     /// The top of the highest band compared, in Hz, when the input or the takes carry
@@ -2215,6 +2239,15 @@ impl SpectralMatcher {
         let pitch = self
             .pitch
             .estimate(lo, hi, |n| samples[ring_slot(samples, n)]);
+        if let (Some(records), Some(ended_by)) = (&mut self.held_ends, h.ended_by()) {
+            records.push(HeldEndRecord {
+                pattern: info.name.clone(),
+                time: h.begin_sample as f64 / self.rate,
+                end: end_sample as f64 / self.rate,
+                decided_at: self.received as f64 / self.rate,
+                ended_by,
+            });
+        }
         out.push(Event {
             id: 0,
             pattern: info.name.clone(),
