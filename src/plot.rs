@@ -8,7 +8,8 @@
 //! of rings closer than the name is wide) and, as a thin
 //! line at its height, the sound that gate held against it (the unrecognised sound that
 //! closed the speech guard, the impulse it continues...); the waveform panel marks
-//! those onsets with a grey line.
+//! those onsets with a grey line. A held sound's span is labelled at its end with why
+//! it ended.
 //!
 //! Runs on the main thread of `onomato analyze`, after the analysis.
 
@@ -253,6 +254,15 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
             }
             .map_err(|e| fail(&e))?;
         }
+        // Why each of its held sounds ended, at its end (`--explain`'s `held_ends`).
+        let ends = analysis.held_ends.iter().flatten();
+        let style = ("sans-serif", 10).into_font().color(&BLACK.mix(0.7));
+        chart
+            .draw_series(
+                ends.filter(|r| *r.pattern == **name)
+                    .map(|r| Text::new(r.ended_by.as_str(), (r.end, 0.12), style.clone())),
+            )
+            .map_err(|e| fail(&e))?;
         if analysis.score_traces.is_none() {
             chart
                 .draw_series(
