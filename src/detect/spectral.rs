@@ -932,7 +932,8 @@ impl SpectralMatcher {
             .compare_on(&self.background_full, &self.analyzer.cepstrum);
     }
 
-    /// Keeps a record of every onset from now on (grows with the stream: offline).
+    /// Keeps a record of every onset, and of every held sound's end, from now on (grows
+    /// with the stream: offline).
     pub fn enable_explain(&mut self) {
         self.explain.get_or_insert_with(Vec::new);
         self.held_ends.get_or_insert_with(Vec::new);
