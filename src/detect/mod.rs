@@ -387,28 +387,31 @@ impl Detector {
     /// Hands over the onset records (see [`Detector::enable_explain`]), their times on
     /// the stream's clock.
     pub fn take_explain(&mut self) -> Option<Vec<spectral::OnsetRecord>> {
-        let Matcher::Spectral(m) = &mut self.matcher else {
-            return None;
-        };
-        let mut records = m.take_explain()?;
-        for r in &mut records {
-            r.time += self.time_offset;
-            r.decided_at += self.time_offset;
-        }
-        Some(records)
+        self.take_records(SpectralMatcher::take_explain, spectral::OnsetRecord::shift)
     }
 
     /// Hands over the held sounds' ends and why each ended (see
     /// [`Detector::enable_explain`]), their times on the stream's clock.
     pub fn take_held_ends(&mut self) -> Option<Vec<spectral::HeldEndRecord>> {
+        self.take_records(
+            SpectralMatcher::take_held_ends,
+            spectral::HeldEndRecord::shift,
+        )
+    }
+
+    /// The spectral matcher's records that `take` hands over, each moved onto the
+    /// stream's clock by `shift`.
+    fn take_records<R>(
+        &mut self,
+        take: fn(&mut SpectralMatcher) -> Option<Vec<R>>,
+        shift: fn(&mut R, f64),
+    ) -> Option<Vec<R>> {
         let Matcher::Spectral(m) = &mut self.matcher else {
             return None;
         };
-        let mut records = m.take_held_ends()?;
+        let mut records = take(m)?;
         for r in &mut records {
-            r.time += self.time_offset;
-            r.end += self.time_offset;
-            r.decided_at += self.time_offset;
+            shift(r, self.time_offset);
         }
         Some(records)
     }

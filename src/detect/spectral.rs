@@ -410,8 +410,6 @@ pub struct SpectralMatcher {
     separating_scratch: Separating,
     /// A take's pooled power over several windows (scratch).
     take_power: Vec<f32>,
-    /// A held sound's mean frame, for its strength (scratch).
-    held_mean_frame: [f32; BANDS],
     /// The features of every onset that stands out of its quiet, when building a
     /// background model ([`background_model`]).
     collected: Option<Vec<f32>>,
@@ -513,6 +511,28 @@ pub struct HeldEndRecord {
     #[serde(serialize_with = "super::seconds")]
     pub decided_at: f64,
     pub ended_by: HeldEnd,
+}
+
+impl OnsetRecord {
+    /// The same record on a stream clock `seconds` later (a detector that continues
+    /// another's stream).
+    pub(super) fn shift(&mut self, seconds: f64) {
+        self.time += seconds;
+        self.decided_at += seconds;
+        if let Some(span) = &mut self.because_of {
+            span.from += seconds;
+            span.to += seconds;
+        }
+    }
+}
+
+impl HeldEndRecord {
+    /// As [`OnsetRecord::shift`].
+    pub(super) fn shift(&mut self, seconds: f64) {
+        self.time += seconds;
+        self.end += seconds;
+        self.decided_at += seconds;
+    }
 }
 
 /// A stretch of the stream, seconds ([`OnsetRecord::because_of`]).
@@ -857,7 +877,6 @@ impl SpectralMatcher {
             ),
             max_windows: 1,
             take_power: vec![0.0; BANDS],
-            held_mean_frame: [0.0; BANDS],
             collected: None,
             kinds,
             carried_top_hz: carried,
@@ -1588,10 +1607,12 @@ impl SpectralMatcher {
         if bands != self.analyzer.cepstrum.bands() {
             self.compare_bands(bands);
         }
-        // The decision window's energy in the bands compared, once per onset (the
-        // window pooled anew: scoring leaves the last shift's).
+        // The decision window's energy in the bands compared, once per onset (its power
+        // pooled anew: scoring leaves the last shift's).
         let early = {
-            let power = self.window_power(onset_frame, 1);
+            let mut power = [0.0f32; BANDS];
+            let (cap, k) = (self.frame_capacity, self.decision_frames);
+            pool_ring(&self.frames, cap, onset_frame, k, &mut power);
             self.in_compared_bands(self.decision_window_energy(time_sample), &power)
         };
         self.score_patterns(onset_frame);
@@ -1950,8 +1971,8 @@ impl SpectralMatcher {
     }
 
     /// The mean frame (dB per band) of the frames still in the ring centred in samples
-    /// `lo..hi` (the one nearest `lo` when none is), into `held_mean_frame`.
-    fn mean_frame_between(&mut self, lo: u64, hi: u64) {
+    /// `lo..hi` (the one nearest `lo` when none is).
+    fn mean_frame_between(&self, lo: u64, hi: u64) -> [f32; BANDS] {
         let cap = self.frame_capacity as u64;
         let newest = self.frame_count.saturating_sub(1);
         let oldest = self.frame_count.saturating_sub(cap);
@@ -1960,11 +1981,10 @@ impl SpectralMatcher {
             .analyzer
             .frame_centred_on(hi.saturating_sub(1))
             .clamp(first, newest);
-        self.held_mean_frame.fill(0.0);
+        let mut mean = [0.0f32; BANDS];
         for f in first..=last {
             let slot = (f % cap) as usize;
-            for (m, x) in self
-                .held_mean_frame
+            for (m, x) in mean
                 .iter_mut()
                 .zip(&self.frames[slot * BANDS..(slot + 1) * BANDS])
             {
@@ -1972,7 +1992,8 @@ impl SpectralMatcher {
             }
         }
         let count = (last - first + 1) as f32;
-        self.held_mean_frame.iter_mut().for_each(|m| *m /= count);
+        mean.iter_mut().for_each(|m| *m /= count);
+        mean
     }
 
     /// The energy of take `take`'s decision window in the bands compared.
@@ -2232,8 +2253,7 @@ impl SpectralMatcher {
         // Both powers in the bands compared, as an impulse's strength is: each by its
         // share there in its mean frame (the sound's over the same span, the takes' after
         // their onsets).
-        self.mean_frame_between(lo, hi);
-        let power = power * self.share_of_mean_frame(&self.held_mean_frame);
+        let power = power * self.share_of_mean_frame(&self.mean_frame_between(lo, hi));
         let info = &self.patterns[h.pattern];
         let pattern_power = info.power * self.share_of_mean_frame(info.mean_frame.as_slice());
         let samples = &self.samples;
