@@ -232,17 +232,47 @@ fn strength_follows_the_level_of_each_sound() {
     }
 }
 
+/// `sound` as it reaches the working rate from a 44.1 kHz recording: nothing over the
+/// resampler's passband (8.7 kHz).
+fn through_44k(sound: &[f32]) -> Vec<f32> {
+    let at_44k = resample_clip(sound, RATE, 44_100).unwrap();
+    resample_clip(&at_44k, 44_100, RATE).unwrap()
+}
+
+/// Asserts that the events of `take`, a pattern of `kind`, in `rec` (its instances at
+/// `gains`, in order) are as strong as their gain (within 0.8 to 1.25 of it) through
+/// the working rate, a 16 kHz and an 8 kHz input.
+fn assert_strength_follows_the_gain_at_every_rate(
+    kind: PatternKind,
+    take: &[f32],
+    rec: &[f32],
+    gains: &[f32],
+) {
+    let settings = spectral();
+    for input_rate in [RATE, 16_000, 8_000] {
+        let input = resample_clip(rec, RATE, input_rate).unwrap();
+        let pattern = Pattern::from_samples("sound", kind, vec![take.to_vec()], &settings);
+        let mut det = Detector::new(vec![pattern.unwrap()], &settings, input_rate).unwrap();
+        let events = detect_in_blocks(&mut det, &input, 256);
+        let strengths: Vec<f64> = events.iter().map(|e| e.strength).collect();
+        assert_eq!(events.len(), gains.len(), "{input_rate} Hz: {events:#?}");
+        for (s, g) in strengths.iter().zip(gains) {
+            assert!(
+                (0.8..1.25).contains(&(s / f64::from(*g))),
+                "{input_rate} Hz, gain {g}: {strengths:?}"
+            );
+        }
+    }
+}
+
 /// A take recorded at 44.1 kHz carries more than a 16 or 8 kHz input does (8.7 kHz at
 /// the working rate, against 6.3 and 3.2): heard through such an input, copies of it at
 /// three gains are as strong as their gain, as they are at the take's own rate, not
 /// weaker by what the input cannot carry.
 #[test]
 fn strength_through_a_narrower_input_than_the_take_follows_the_gain() {
-    let settings = spectral();
-    // A bright sound, most of whose energy lies over 3.2 kHz, as it reaches the working
-    // rate from a 44.1 kHz recording.
-    let at_44k = resample_clip(&snare(1), RATE, 44_100).unwrap();
-    let take = resample_clip(&at_44k, 44_100, RATE).unwrap();
+    // A bright sound, most of whose energy lies over 3.2 kHz.
+    let take = through_44k(&snare(1));
     let gains = [1.0f32, 0.5, 0.25];
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     for g in gains {
@@ -250,21 +280,7 @@ fn strength_through_a_narrower_input_than_the_take_follows_the_gain() {
         rec.extend(vec![0.0; samples_for(0.3, RATE)]);
     }
     add_noise(&mut rec, 0.0002, 3);
-    for input_rate in [RATE, 16_000, 8_000] {
-        let input = resample_clip(&rec, RATE, input_rate).unwrap();
-        let pattern =
-            Pattern::from_samples("k", PatternKind::Impulse, vec![take.clone()], &settings);
-        let mut det = Detector::new(vec![pattern.unwrap()], &settings, input_rate).unwrap();
-        let events = detect_in_blocks(&mut det, &input, 256);
-        let strengths: Vec<f64> = events.iter().map(|e| e.strength).collect();
-        assert_eq!(events.len(), gains.len(), "{input_rate} Hz: {strengths:?}");
-        for (s, g) in strengths.iter().zip(gains) {
-            assert!(
-                (0.8..1.25).contains(&(s / f64::from(g))),
-                "{input_rate} Hz, gain {g}: {strengths:?}"
-            );
-        }
-    }
+    assert_strength_follows_the_gain_at_every_rate(PatternKind::Impulse, &take, &rec, &gains);
 }
 
 /// The same for a held sound: a bright "chhh" from a 44.1 kHz recording, held at two
@@ -272,9 +288,7 @@ fn strength_through_a_narrower_input_than_the_take_follows_the_gain() {
 /// each time.
 #[test]
 fn a_held_sound_through_a_narrower_input_than_its_take_is_as_strong_as_its_gain() {
-    let settings = spectral();
-    let at_44k = resample_clip(&chhh(0.5, 1), RATE, 44_100).unwrap();
-    let take = resample_clip(&at_44k, 44_100, RATE).unwrap();
+    let take = through_44k(&chhh(0.5, 1));
     let gains = [1.0f32, 0.5];
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     for (i, g) in gains.iter().enumerate() {
@@ -283,26 +297,8 @@ fn a_held_sound_through_a_narrower_input_than_its_take_is_as_strong_as_its_gain(
     }
     add_noise(&mut rec, 0.0002, 4);
     // Performed through the take's microphone.
-    let rec = resample_clip(&resample_clip(&rec, RATE, 44_100).unwrap(), 44_100, RATE).unwrap();
-    for input_rate in [RATE, 16_000, 8_000] {
-        let input = resample_clip(&rec, RATE, input_rate).unwrap();
-        let pattern = Pattern::from_samples(
-            "chhh",
-            PatternKind::Continuous,
-            vec![take.clone()],
-            &settings,
-        );
-        let mut det = Detector::new(vec![pattern.unwrap()], &settings, input_rate).unwrap();
-        let events = detect_in_blocks(&mut det, &input, 256);
-        let strengths: Vec<f64> = events.iter().map(|e| e.strength).collect();
-        assert_eq!(events.len(), gains.len(), "{input_rate} Hz: {events:#?}");
-        for (s, g) in strengths.iter().zip(gains) {
-            assert!(
-                (0.8..1.25).contains(&(s / f64::from(g))),
-                "{input_rate} Hz, gain {g}: {strengths:?}"
-            );
-        }
-    }
+    let rec = through_44k(&rec);
+    assert_strength_follows_the_gain_at_every_rate(PatternKind::Continuous, &take, &rec, &gains);
 }
 
 /// A held "chhh": bright noise with 10 ms fades.
