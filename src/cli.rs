@@ -4,6 +4,10 @@
 //!
 //! Runs on the main thread.
 
+// The arguments' doc comments are their `--help` texts, which name config tables as
+// the config file writes them (`[render]`, `[[performer]]`), not as links.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -14,6 +14,7 @@ mod context;
 mod copies;
 mod enrol;
 mod envelope;
+mod explain;
 mod features;
 pub mod gates;
 mod held;
@@ -34,11 +35,10 @@ use crate::audio::{resample_clip, AudioError, ChannelSelect, StreamResampler, Wa
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 use background::BackgroundModel;
+pub use explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Wait};
 pub use gates::Outcome;
 pub use held::HeldEnd;
-pub use spectral::{
-    AlikePair, HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, SpectralMatcher, Wait,
-};
+pub use spectral::{AlikePair, SpectralMatcher};
 pub use waveform::WaveformMatcher;
 
 /// The seed of the stages' own noise ([`white_noise`]).
@@ -386,17 +386,14 @@ impl Detector {
 
     /// Hands over the onset records (see [`Detector::enable_explain`]), their times on
     /// the stream's clock.
-    pub fn take_explain(&mut self) -> Option<Vec<spectral::OnsetRecord>> {
-        self.take_records(SpectralMatcher::take_explain, spectral::OnsetRecord::shift)
+    pub fn take_explain(&mut self) -> Option<Vec<OnsetRecord>> {
+        self.take_records(SpectralMatcher::take_explain, OnsetRecord::shift)
     }
 
     /// Hands over the held sounds' ends and why each ended (see
     /// [`Detector::enable_explain`]), their times on the stream's clock.
-    pub fn take_held_ends(&mut self) -> Option<Vec<spectral::HeldEndRecord>> {
-        self.take_records(
-            SpectralMatcher::take_held_ends,
-            spectral::HeldEndRecord::shift,
-        )
+    pub fn take_held_ends(&mut self) -> Option<Vec<HeldEndRecord>> {
+        self.take_records(SpectralMatcher::take_held_ends, HeldEndRecord::shift)
     }
 
     /// The spectral matcher's records that `take` hands over, each moved onto the
