@@ -281,7 +281,10 @@ impl Analyzer {
     }
 }
 
-/// Pooled bands are floored this far below the loudest pooled band.
+/// Pooled bands are floored this far below the loudest pooled band: the quiet bands'
+/// fine shape, which varies from one hit to the next, counts no further down. Swept
+/// from 30 to 60 dB over every dev set (`docs/classify.md`): 50 and 60 a plateau,
+/// narrower ranges lose the real hits.
 pub(super) const POOLED_RANGE_DB: f32 = 50.0;
 /// Length of a feature vector: the cepstral coefficients of the pooled spectrum (the
 /// first, its mean level, always 0).
