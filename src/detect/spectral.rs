@@ -151,6 +151,26 @@ struct FirstLook {
     guard: Guard,
 }
 
+/// What was decided of one onset ([`SpectralMatcher::classify`]), for the steps that
+/// act on it: the record, the guard's cover of a stopped sound, the firing.
+struct Decision {
+    time_sample: u64,
+    onset_frame: u64,
+    /// Its pattern, and the evidence the gates judged it on.
+    pattern: usize,
+    evidence: Evidence,
+    outcome: Outcome,
+    guard: Guard,
+    /// Its peak level by the guard's measure and by the quiet-before rise's.
+    peak: f32,
+    rise_peak: f32,
+    /// It was named by what a take adds to a fired word's tail.
+    judged_over_tail: bool,
+    /// Decision windows its choice heard, and why more than one.
+    heard_windows: usize,
+    waited_for: Option<Wait>,
+}
+
 /// A placed onset waiting for its decision.
 #[derive(Clone, Copy)]
 struct PendingOnset {
@@ -1229,79 +1249,23 @@ impl SpectralMatcher {
                 }
             }
         }
-        let Evidence {
-            best_score,
-            strength,
-            ..
-        } = evidence;
-        let best_template = self.pattern_scores[pi].take;
+        let decision = Decision {
+            time_sample,
+            onset_frame,
+            pattern: pi,
+            evidence,
+            outcome,
+            guard,
+            peak,
+            rise_peak,
+            judged_over_tail,
+            heard_windows: parted_over.max(heard_windows),
+            waited_for,
+        };
         if self.explain.is_some() {
-            let second = self
-                .runner_up(pi)
-                .map(|p| (p, self.pattern_scores[p].score));
-            let name = |i: usize| self.patterns[i].name.clone();
-            let record = OnsetRecord {
-                time: time_sample as f64 / self.rate,
-                decided_at: self.received as f64 / self.rate,
-                best: Some(name(pi)),
-                best_score: Some(f64::from(best_score)),
-                second: second.map(|s| name(s.0)),
-                second_score: second.map(|s| f64::from(s.1)),
-                strength: Some(strength),
-                background_score: (!self.background.is_empty())
-                    .then_some(f64::from(self.background_score)),
-                rise_db: evidence
-                    .rise_db
-                    .is_finite()
-                    .then_some(f64::from(evidence.rise_db)),
-                over_fired_impulse: evidence.over_fired_impulse,
-                explained_over_tail: judged_over_tail
-                    .then_some(f64::from(evidence.explained_over_tail)),
-                guard_by_stopped_speech: outcome == Outcome::SpeechGuard
-                    && guard == Guard::ClosedByStopped,
-                window_seconds: Some(self.heard_seconds(parted_over.max(heard_windows))),
-                waited_for,
-                matched_by: Some(self.pattern_scores[pi].matched_by),
-                outcome,
-                because_of: self
-                    .because_of(outcome, time_sample, peak, guard)
-                    .map(|span| self.sound_span(span)),
-            };
-            if let Some(records) = &mut self.explain {
-                records.push(record);
-            }
+            self.record(&decision);
         }
-        // A sound the guard stopped, but that the threshold and the background would
-        // have let through, is a pattern's sound too: it covers its span as a fired one
-        // does, so the guard does not feed on its own decisions (only sounds that are
-        // none of the patterns keep it closed). One that lies as near speech as to its
-        // pattern (within the background's margin either way) and that the guard
-        // stopped on unrecognised sound is that talk going on: it counts as
-        // unrecognised sound, but what it alone closes the guard on covers again, so a
-        // stop passes on once at most (`docs/speech-guard.md`).
-        // A recognised sound is covered from where the guard's look ends before it.
-        let covered_from = self.quiet_before_span(time_sample).1;
-        if outcome == Outcome::SpeechGuard
-            && !evidence.below_threshold()
-            && !evidence.like_speech(&self.gates)
-        {
-            let near_speech = guard == Guard::Closed
-                && best_score - evidence.background_score < self.gates.background_margin;
-            if self.patterns[pi].kind == PatternKind::Continuous {
-                // A held sound covers as long as the held stage hears it go on.
-                self.end_stopped_held();
-                self.held_room[Stage::Stopped as usize] = self.room_under(onset_frame);
-                let loudest = self.held_loudest_since(Stage::Stopped, onset_frame);
-                let slot = self.context.held_began(covered_from, near_speech);
-                self.stopped_held_span = Some((slot, covered_from));
-                self.stopped_held
-                    .begin(pi, time_sample, best_score, loudest, self.frame_count - 1);
-            } else {
-                let to = time_sample + self.templates[best_template].length_after_onset;
-                self.context
-                    .stopped_impulse(covered_from, to, near_speech, rise_peak);
-            }
-        }
+        self.cover_stopped(&decision);
         if outcome != Outcome::Fired {
             // What its first window looked like may have misled the gates; what came
             // before it is the guard's to judge, and a user who plays a take back while
@@ -1311,6 +1275,106 @@ impl SpectralMatcher {
             }
             return None;
         }
+        self.fire(&decision, out);
+        None
+    }
+
+    /// Records what became of an onset, for `--explain`.
+    fn record(&mut self, d: &Decision) {
+        let pi = d.pattern;
+        let evidence = &d.evidence;
+        let second = self
+            .runner_up(pi)
+            .map(|p| (p, self.pattern_scores[p].score));
+        let name = |i: usize| self.patterns[i].name.clone();
+        let record = OnsetRecord {
+            time: d.time_sample as f64 / self.rate,
+            decided_at: self.received as f64 / self.rate,
+            best: Some(name(pi)),
+            best_score: Some(f64::from(evidence.best_score)),
+            second: second.map(|s| name(s.0)),
+            second_score: second.map(|s| f64::from(s.1)),
+            strength: Some(evidence.strength),
+            background_score: (!self.background.is_empty())
+                .then_some(f64::from(self.background_score)),
+            rise_db: evidence
+                .rise_db
+                .is_finite()
+                .then_some(f64::from(evidence.rise_db)),
+            over_fired_impulse: evidence.over_fired_impulse,
+            explained_over_tail: d
+                .judged_over_tail
+                .then_some(f64::from(evidence.explained_over_tail)),
+            guard_by_stopped_speech: d.outcome == Outcome::SpeechGuard
+                && d.guard == Guard::ClosedByStopped,
+            window_seconds: Some(self.heard_seconds(d.heard_windows)),
+            waited_for: d.waited_for,
+            matched_by: Some(self.pattern_scores[pi].matched_by),
+            outcome: d.outcome,
+            because_of: self
+                .because_of(d.outcome, d.time_sample, d.peak, d.guard)
+                .map(|span| self.sound_span(span)),
+        };
+        if let Some(records) = &mut self.explain {
+            records.push(record);
+        }
+    }
+
+    /// A sound the guard stopped, but that the threshold and the background would have
+    /// let through, is a pattern's sound too: it covers its span as a fired one does, so
+    /// the guard does not feed on its own decisions (only sounds that are none of the
+    /// patterns keep it closed). One that lies as near speech as to its pattern (within
+    /// the background's margin either way) and that the guard stopped on unrecognised
+    /// sound is that talk going on: it counts as unrecognised sound, but what it alone
+    /// closes the guard on covers again, so a stop passes on once at most
+    /// (`docs/speech-guard.md`).
+    fn cover_stopped(&mut self, d: &Decision) {
+        let evidence = &d.evidence;
+        if d.outcome != Outcome::SpeechGuard
+            || evidence.below_threshold()
+            || evidence.like_speech(&self.gates)
+        {
+            return;
+        }
+        let pi = d.pattern;
+        let covered_from = self.covered_from(d.time_sample);
+        let near_speech = d.guard == Guard::Closed
+            && evidence.best_score - evidence.background_score < self.gates.background_margin;
+        if self.patterns[pi].kind == PatternKind::Continuous {
+            // A held sound covers as long as the held stage hears it go on.
+            self.end_stopped_held();
+            self.held_room[Stage::Stopped as usize] = self.room_under(d.onset_frame);
+            let loudest = self.held_loudest_since(Stage::Stopped, d.onset_frame);
+            let slot = self.context.held_began(covered_from, near_speech);
+            self.stopped_held_span = Some((slot, covered_from));
+            self.stopped_held.begin(
+                pi,
+                d.time_sample,
+                evidence.best_score,
+                loudest,
+                self.frame_count - 1,
+            );
+        } else {
+            let take = self.pattern_scores[pi].take;
+            let to = d.time_sample + self.templates[take].length_after_onset;
+            self.context
+                .stopped_impulse(covered_from, to, near_speech, d.rise_peak);
+        }
+    }
+
+    /// Fires the onset's pattern: its event (an impulse, or the begin of a held sound,
+    /// which the held stage then follows), and what the context, tracking and the copies
+    /// stage keep of it.
+    fn fire(&mut self, d: &Decision, out: &mut Vec<Event>) {
+        let (pi, time_sample, onset_frame) = (d.pattern, d.time_sample, d.onset_frame);
+        let Evidence {
+            best_score,
+            strength,
+            over_fired_impulse,
+            ..
+        } = d.evidence;
+        let best_template = self.pattern_scores[pi].take;
+        let covered_from = self.covered_from(time_sample);
         self.last_fired = Some(time_sample);
         let take_length = self.templates[best_template].length_after_onset;
         // The impulse, or the begin marker of a held sound (the daemon sends it at
@@ -1340,7 +1404,7 @@ impl SpectralMatcher {
             self.context.fired_impulse(
                 covered_from,
                 time_sample + take_length,
-                rise_peak,
+                d.rise_peak,
                 time_sample + SPAN_STRETCH * take_length,
             );
         }
@@ -1351,11 +1415,10 @@ impl SpectralMatcher {
             strength,
         });
         if kind == PatternKind::Impulse {
-            self.track(pi, evidence.over_fired_impulse);
+            self.track(pi, over_fired_impulse);
             self.copies.fired(time_sample, pi);
         }
         out.push(decided);
-        None
     }
 
     /// The event of pattern `pi` whose onset is at `time_sample`, decided now.
@@ -1688,6 +1751,12 @@ impl SpectralMatcher {
         let (quiet_from, quiet_to) = self.quiet_before_span(time_sample);
         self.frames_inside(quiet_from, quiet_to)
             .any(|f| self.context.fired_at(self.analyzer.frame_centre(f)))
+    }
+
+    /// Where a recognised sound that begins at `time_sample` is covered from, for the
+    /// speech guard: where the guard's look ends before it.
+    fn covered_from(&self, time_sample: u64) -> u64 {
+        self.quiet_before_span(time_sample).1
     }
 
     /// The samples `[from, to)` before the onset at `time_sample` that its sound must
