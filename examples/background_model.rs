@@ -1,7 +1,8 @@
 //! Builds the background model of `src/detect/background.rs` from the speech that
 //! `scripts/background-speech.sh` synthesises: the features of every onset that stands
 //! out of its quiet, pooled as the spectral matcher with the default settings pools
-//! them, from every WAV in a folder (in name order).
+//! them, from every WAV in a folder (in name order), each heard over the least noise an
+//! input carries ([`add_least_input_noise`]).
 //!
 //!     bash scripts/background-speech.sh /tmp/background
 //!     cargo run --release --example background_model -- /tmp/background src/detect/background.bin
@@ -10,7 +11,7 @@ use std::path::PathBuf;
 
 use onomato::audio::{resample_clip, ChannelSelect, WavSource};
 use onomato::config::DetectorSettings;
-use onomato::detect::background::BackgroundModel;
+use onomato::detect::background::{add_least_input_noise, BackgroundModel};
 use onomato::detect::spectral::background_model;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -28,7 +29,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for path in &wavs {
         let mut source = WavSource::open(path, ChannelSelect::Mix)?;
         let rate = source.sample_rate();
-        let samples = resample_clip(&source.read_all()?, rate, settings.sample_rate)?;
+        let mut samples = resample_clip(&source.read_all()?, rate, settings.sample_rate)?;
+        add_least_input_noise(&mut samples);
         let model = background_model(&samples, &settings);
         println!("{}: {} onsets", path.display(), model.len());
         (features, frames) = model.shape();
