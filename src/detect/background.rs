@@ -32,7 +32,8 @@ const MAGIC: &[u8; 4] = b"ONBG";
 /// such silence for a room of its own, out of which every faint sound after a pause
 /// rises and would be pooled as speech. From -90 to -70 dB the model and the figures
 /// stand alike; with no noise the model pools a quarter more sounds and stops more
-/// real hits (`docs/background.md`, "The model and the stages of today").
+/// real hits (`docs/background.md`, "The model made again, over the least noise an
+/// input carries").
 pub fn add_least_input_noise(samples: &mut [f32]) {
     // Uniform noise in ±a has power a² / 3.
     let amplitude = 3f32.sqrt() / 32_768.0;
