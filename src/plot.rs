@@ -90,7 +90,9 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
     let root = SVGBackend::new(path, (WIDTH + LEGEND_PIXELS, height)).into_drawing_area();
     // The time axis of every panel, reaching on under the legend column.
     let plotted = f64::from(WIDTH + LEGEND_PIXELS - 2 * MARGIN - Y_LABELS);
-    let axis_end = duration * plotted / (plotted - f64::from(LEGEND_PIXELS));
+    // The pixels the recording's own time spans.
+    let duration_pixels = plotted - f64::from(LEGEND_PIXELS);
+    let axis_end = duration * plotted / duration_pixels;
     let time_label = |t: &f64| {
         if *t <= duration * (1.0 + 1e-9) {
             format!("{t:.1}")
@@ -308,7 +310,7 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
             // this panel; none where both would, or where the name it would overprint is
             // its own: a run of rings within a name's width (the syllables of a word, the
             // onsets inside a held sound) is named once, every ring still drawn.
-            let label_seconds = duration * LABEL_PIXELS / f64::from(WIDTH);
+            let label_seconds = duration * LABEL_PIXELS / duration_pixels;
             let mut labels: Vec<(&'static str, (f64, f64))> = Vec::new();
             for o in &rejected {
                 let (t, y) = at(o);
@@ -330,7 +332,6 @@ pub fn write_svg(path: &Path, samples: &[f32], analysis: &Analysis) -> Result<()
                     _ => {}
                 }
             }
-            let style = ("sans-serif", 10).into_font().color(&BLACK.mix(0.7));
             chart
                 .draw_series(
                     labels
