@@ -91,6 +91,14 @@ impl Held {
     pub fn ended_by(&self) -> Option<HeldEnd> {
         self.ended_by
     }
+
+    /// The same sound, ended for `why`.
+    fn ending(self, why: HeldEnd) -> Self {
+        Self {
+            ended_by: Some(why),
+            ..self
+        }
+    }
 }
 
 /// The held sound going on, if any.
@@ -177,15 +185,6 @@ impl HeldStage {
     /// Ends the going sound (the stream ended, or the detector stops).
     pub fn end(&mut self) -> Option<Held> {
         self.current.take().map(|h| h.ending(HeldEnd::StreamEnded))
-    }
-}
-
-impl Held {
-    fn ending(self, why: HeldEnd) -> Self {
-        Self {
-            ended_by: Some(why),
-            ..self
-        }
     }
 }
 
