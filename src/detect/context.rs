@@ -345,6 +345,20 @@ impl Context {
         }
     }
 
+    /// Whether the sound before a new sound that peaks at `peak_db` (the guard's
+    /// `frames`) held at most half the unrecognised sound that closes the guard: heard
+    /// clear of talk, what fired there may teach tracking ([`super::classify::Tracked`]).
+    pub(super) fn clear_of_talk(
+        &self,
+        frames: impl Iterator<Item = (u64, f32)>,
+        peak_db: f32,
+    ) -> bool {
+        let counted = frames
+            .filter(|&(centre, level)| self.counted(centre, level, peak_db).is_some())
+            .count();
+        2 * counted <= self.guard_frames
+    }
+
     /// What closed the guard (`guard`, its judgement of the same `frames`): the centres
     /// of the first and last frames of sound it counted, the stopped sounds near speech
     /// among them only when it closed by them. None when it did not close.

@@ -1415,7 +1415,10 @@ impl SpectralMatcher {
             strength,
         });
         if kind == PatternKind::Impulse {
-            self.track(pi, over_fired_impulse);
+            let amid_talk = !self
+                .context
+                .clear_of_talk(self.guard_frames(time_sample), d.peak);
+            self.track(pi, over_fired_impulse, amid_talk);
             self.copies.fired(time_sample, pi);
         }
         out.push(decided);
@@ -1822,8 +1825,9 @@ impl SpectralMatcher {
     }
 
     /// Lets the tracked templates of `pi`, which fired, follow this instance
-    /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail.
-    fn track(&mut self, pi: usize, over_fired_impulse: bool) {
+    /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail,
+    /// `amid_talk` if it followed unrecognised sound ([`Context::clear_of_talk`]).
+    fn track(&mut self, pi: usize, over_fired_impulse: bool, amid_talk: bool) {
         let other = self
             .pattern_scores
             .iter()
@@ -1838,6 +1842,7 @@ impl SpectralMatcher {
             other,
             threshold: self.patterns[pi].threshold,
             over_fired_impulse,
+            amid_talk,
         };
         self.tracked.follow(pi, &instance);
     }
