@@ -216,9 +216,9 @@ pub(super) struct FiredInstance<'a> {
 /// Neither learns from an instance amid talk (more than half the unrecognised sound
 /// that closes the speech guard in the span before it): a syllable that passed the
 /// gates would move the template to speech, and the syllables after it would match the
-/// template and move it further, a rule feeding on its own decisions (real speech at
-/// its worst cut 4.21 to 1.98 false events a minute, the dev sets' F1 as it was:
-/// `docs/classify.md`, "Tracking that learns only in the clear").
+/// template and move it further, a rule feeding on its own decisions. Half the guard's
+/// sound is the middle of the plateau swept in `docs/classify.md` ("Tracking that
+/// learns only in the clear").
 pub(super) struct Tracked {
     params: TrackParams,
     features: usize,
