@@ -89,7 +89,7 @@ impl Default for GateParams {
             pre_quiet_db: 10.0,
             over_fired_score: 0.95,
             over_tail_share: 0.85,
-            background_margin: 0.06,
+            background_margin: 0.07,
             min_strength: 0.06,
         }
     }
