@@ -752,6 +752,50 @@ fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
     assert!(events.iter().all(|e| &*e.pattern != "pew"), "{events:#?}");
 }
 
+/// What a pattern learns comes only from instances heard clear of talk. The same
+/// drifting "pew" as above, each one 0.1 s after 0.15 s of a sung vowel (none of the
+/// patterns): too little to close the speech guard (0.2 s), so each "pew" is judged
+/// as any onset and fires while its take still recognises it, but more than half of
+/// it, so none teaches its pattern, and the "pew"s that only tracking could follow are
+/// not found. A syllable that passed the gates amid speech would otherwise move the
+/// template to speech and find the syllables after it.
+#[test]
+fn a_sound_heard_amid_unrecognised_sound_teaches_tracking_nothing() {
+    let settings = spectral();
+    let patterns = vec![
+        impulse("pew", pew(1.0), &settings),
+        impulse("b", kick(1), &settings),
+        impulse("ts", hat(1), &settings),
+    ];
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut pews = Vec::new();
+    let mut factor = 1.0;
+    while factor < 2.0 {
+        factor *= 1.04;
+        rec.extend(buzz(RATE, 0.15, 320.0).iter().map(|v| v * 0.8));
+        rec.extend(vec![0.0; samples_for(0.1, RATE)]);
+        pews.push((rec.len() as f64 / f64::from(RATE), factor));
+        rec.extend(pew(factor));
+        rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 18);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let found = |at: f64| {
+        events
+            .iter()
+            .any(|e| &*e.pattern == "pew" && (e.time - at).abs() < 0.05)
+    };
+    // Near the take, every one is found: the vowel did not close the guard.
+    for &(at, factor) in pews.iter().filter(|(_, f)| *f < 1.1) {
+        assert!(found(at), "the pew {factor:.2} times as high: {events:#?}");
+    }
+    // Far from it, where only a template that followed the drift recognises them.
+    for &(at, factor) in pews.iter().filter(|(_, f)| *f > 1.8) {
+        assert!(!found(at), "the pew {factor:.2} times as high: {events:#?}");
+    }
+}
+
 /// The tracked template follows the way a sound was made last; the latest clear
 /// instances are kept as they were too. Here a "pew" (its pattern enrolled beside a
 /// "peew" half as high again) is said once a little low and once a little high, each
