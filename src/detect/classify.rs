@@ -192,7 +192,7 @@ pub(super) struct FiredInstance<'a> {
     /// Whether it began over the tail of an impulse that fired.
     pub(super) over_fired_impulse: bool,
     /// Whether the speech guard's span before it held more than half the unrecognised
-    /// sound that closes the guard ([`super::context::Context::clear_of_talk`]).
+    /// sound that closes the guard ([`super::context::Context::guard`]).
     pub(super) amid_talk: bool,
 }
 

@@ -326,8 +326,10 @@ impl Context {
     /// when the guard closes only with them it says so, and what it stops then covers
     /// its span again: a stop passes on once at most. A frame with no sound over the room
     /// (`SILENT_DB`: digital silence, a closed noise gate) is no sound, however little
-    /// the new one stands over its own floor.
-    pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Guard {
+    /// the new one stands over its own floor. The same count says whether the onset was
+    /// heard clear of talk: at most half of what closes the guard, so that what fires
+    /// there may teach tracking ([`super::classify::Tracked`]).
+    pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Before {
         let (mut unrecognised, mut near_speech) = (0, 0);
         for (centre, level) in frames {
             match self.counted(centre, level, peak_db) {
@@ -336,27 +338,17 @@ impl Context {
                 None => {}
             }
         }
-        if unrecognised >= self.guard_frames {
+        let guard = if unrecognised >= self.guard_frames {
             Guard::Closed
         } else if unrecognised + near_speech >= self.guard_frames {
             Guard::ClosedByStopped
         } else {
             Guard::Open
+        };
+        Before {
+            guard,
+            clear_of_talk: 2 * (unrecognised + near_speech) <= self.guard_frames,
         }
-    }
-
-    /// Whether the sound before a new sound that peaks at `peak_db` (the guard's
-    /// `frames`) held at most half the unrecognised sound that closes the guard: heard
-    /// clear of talk, what fired there may teach tracking ([`super::classify::Tracked`]).
-    pub(super) fn clear_of_talk(
-        &self,
-        frames: impl Iterator<Item = (u64, f32)>,
-        peak_db: f32,
-    ) -> bool {
-        let counted = frames
-            .filter(|&(centre, level)| self.counted(centre, level, peak_db).is_some())
-            .count();
-        2 * counted <= self.guard_frames
     }
 
     /// What closed the guard (`guard`, its judgement of the same `frames`): the centres
@@ -406,6 +398,15 @@ enum Counted {
     NearSpeech,
 }
 
+/// What the sound before an onset showed ([`Context::guard`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Before {
+    /// The speech guard's judgement.
+    pub guard: Guard,
+    /// It held at most half the unrecognised sound that closes the guard.
+    pub clear_of_talk: bool,
+}
+
 /// The speech guard's judgement of the sound before an onset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Guard {
@@ -428,7 +429,7 @@ mod tests {
     }
 
     fn closed(c: &Context, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> bool {
-        c.guard(frames, peak_db) != Guard::Open
+        c.guard(frames, peak_db).guard != Guard::Open
     }
 
     /// Frames 1 ms apart (centres in samples of 1 kHz) from `from` for `count` frames,
@@ -463,7 +464,7 @@ mod tests {
         let mut c = context();
         c.fired_impulse(0, 99, -20.0, 99);
         let before = || frames(0, 300, -25.0).chain(frames(300, 50, -31.0));
-        assert_eq!(c.guard(before(), -20.0), Guard::Closed);
+        assert_eq!(c.guard(before(), -20.0).guard, Guard::Closed);
         assert_eq!(
             c.guard_sound(before(), -20.0, Guard::Closed),
             Some((100, 299))
@@ -511,13 +512,13 @@ mod tests {
             assert!(!c.recognised_at(100));
             // 150 ms of it and 100 ms of other unrecognised sound: closed by it alone.
             let before = || frames(0, 100, -25.0).chain(frames(100, 150, -25.0));
-            assert_eq!(c.guard(before(), -20.0), Guard::ClosedByStopped);
+            assert_eq!(c.guard(before(), -20.0).guard, Guard::ClosedByStopped);
             // With 200 ms of other unrecognised sound the guard is closed as it was.
-            assert_eq!(c.guard(frames(300, 200, -25.0), -20.0), Guard::Closed);
-            assert_eq!(c.guard(frames(0, 100, -25.0), -20.0), Guard::Open);
+            assert_eq!(c.guard(frames(300, 200, -25.0), -20.0).guard, Guard::Closed);
+            assert_eq!(c.guard(frames(0, 100, -25.0), -20.0).guard, Guard::Open);
             // A recognised sound over it covers it.
             c.stopped(100, 249, false);
-            assert_eq!(c.guard(before(), -20.0), Guard::Open);
+            assert_eq!(c.guard(before(), -20.0).guard, Guard::Open);
         }
     }
 

@@ -77,7 +77,7 @@ use super::background::BackgroundModel;
 use super::classify::{
     default_noise_over_floor, share_explained_over_tail, FiredInstance, Room, TrackParams, Tracked,
 };
-use super::context::{Context, ContextParams, Guard, SPAN_STRETCH};
+use super::context::{Before, Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
@@ -147,8 +147,10 @@ struct FirstLook {
     /// ...and by the quiet-before rise's measure (where its span starts to follow its
     /// sound).
     rise_peak: f32,
-    /// The speech guard's judgement of the sound before it.
+    /// The speech guard's judgement of the sound before it...
     guard: Guard,
+    /// ...and whether it was heard clear of talk ([`Context::guard`]).
+    clear_of_talk: bool,
 }
 
 /// What was decided of one onset ([`SpectralMatcher::classify`]), for the steps that
@@ -161,6 +163,8 @@ struct Decision {
     evidence: Evidence,
     outcome: Outcome,
     guard: Guard,
+    /// Heard clear of talk: what fires may teach tracking ([`Context::guard`]).
+    clear_of_talk: bool,
     /// Its peak level by the guard's measure and by the quiet-before rise's.
     peak: f32,
     rise_peak: f32,
@@ -1192,6 +1196,7 @@ impl SpectralMatcher {
             peak,
             rise_peak,
             guard,
+            clear_of_talk,
         } = first_look;
         // Over a fired word's tail, the onset's features are mostly the tail's: it is
         // named by what its takes add to the tail instead, where one explains enough.
@@ -1256,6 +1261,7 @@ impl SpectralMatcher {
             evidence,
             outcome,
             guard,
+            clear_of_talk,
             peak,
             rise_peak,
             judged_over_tail,
@@ -1415,10 +1421,7 @@ impl SpectralMatcher {
             strength,
         });
         if kind == PatternKind::Impulse {
-            let amid_talk = !self
-                .context
-                .clear_of_talk(self.guard_frames(time_sample), d.peak);
-            self.track(pi, over_fired_impulse, amid_talk);
+            self.track(pi, over_fired_impulse, !d.clear_of_talk);
             self.copies.fired(time_sample, pi);
         }
         out.push(decided);
@@ -1517,7 +1520,10 @@ impl SpectralMatcher {
                 best = p;
             }
         }
-        let guard = self.guard(time_sample, peak);
+        let Before {
+            guard,
+            clear_of_talk,
+        } = self.guard(time_sample, peak);
         let over_fired_impulse = self.over_fired_impulse(time_sample);
         self.over_tail_shares.fill(0.0);
         if self.judged_over_tail(over_fired_impulse, rise_db, best) {
@@ -1547,6 +1553,7 @@ impl SpectralMatcher {
             peak,
             rise_peak,
             guard,
+            clear_of_talk,
         })
     }
 
@@ -1826,7 +1833,7 @@ impl SpectralMatcher {
 
     /// Lets the tracked templates of `pi`, which fired, follow this instance
     /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail,
-    /// `amid_talk` if it followed unrecognised sound ([`Context::clear_of_talk`]).
+    /// `amid_talk` if it was not heard clear of talk ([`Context::guard`]).
     fn track(&mut self, pi: usize, over_fired_impulse: bool, amid_talk: bool) {
         let other = self
             .pattern_scores
@@ -2013,8 +2020,8 @@ impl SpectralMatcher {
     /// The speech guard's judgement ([`Context::guard`]) of the `speech_guard_seconds`
     /// before an onset (up to 5 ms before it), near the new sound's `peak` (dB): whether
     /// the onset is part of a longer unrecognised sound, such as a consonant inside
-    /// speech.
-    fn guard(&self, time_sample: u64, peak: f32) -> Guard {
+    /// speech; and whether it was heard clear of talk.
+    fn guard(&self, time_sample: u64, peak: f32) -> Before {
         self.context.guard(self.guard_frames(time_sample), peak)
     }
 
