@@ -708,23 +708,37 @@ fn pew(factor: f64) -> Vec<f32> {
     sweep(RATE, 0.12, 1200.0 * factor, 500.0 * factor, 0.04)
 }
 
+/// The "pew", a kick and a hat, enrolled for the drifting "pew"s below.
+fn pew_kick_and_hat(settings: &DetectorSettings) -> Vec<Pattern> {
+    vec![
+        impulse("pew", pew(1.0), settings),
+        impulse("b", kick(1), settings),
+        impulse("ts", hat(1), settings),
+    ]
+}
+
+/// The pitch factors of a "pew" that rises by 4% a time to twice its enrolled pitch.
+fn drifting_pitches() -> Vec<f64> {
+    let mut factors = vec![1.04];
+    while factors[factors.len() - 1] < 2.0 {
+        factors.push(factors[factors.len() - 1] * 1.04);
+    }
+    factors
+}
+
 #[test]
 fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
     let settings = spectral();
-    let patterns = vec![
-        impulse("pew", pew(1.0), &settings),
-        impulse("b", kick(1), &settings),
-        impulse("ts", hat(1), &settings),
-    ];
+    let patterns = pew_kick_and_hat(&settings);
     // The "pew" rises by 4% a time, to twice its enrolled pitch; a kick and a hat
     // after it are still theirs.
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut truth = Vec::new();
-    let mut factor = 1.0;
-    while factor < 2.0 {
-        factor *= 1.04;
+    let pitches = drifting_pitches();
+    for &factor in &pitches {
         append_impulse(&mut rec, &mut truth, "pew", &pew(factor), 0.3);
     }
+    let factor = pitches[pitches.len() - 1];
     for seed in 2..5 {
         append_impulse(&mut rec, &mut truth, "b", &kick(seed), 0.3);
         append_impulse(&mut rec, &mut truth, "ts", &hat(seed), 0.3);
@@ -762,16 +776,10 @@ fn a_sound_that_drifts_away_from_its_take_step_by_step_is_followed() {
 #[test]
 fn a_sound_heard_amid_unrecognised_sound_teaches_tracking_nothing() {
     let settings = spectral();
-    let patterns = vec![
-        impulse("pew", pew(1.0), &settings),
-        impulse("b", kick(1), &settings),
-        impulse("ts", hat(1), &settings),
-    ];
+    let patterns = pew_kick_and_hat(&settings);
     let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
     let mut pews = Vec::new();
-    let mut factor = 1.0;
-    while factor < 2.0 {
-        factor *= 1.04;
+    for factor in drifting_pitches() {
         rec.extend(buzz(RATE, 0.15, 320.0).iter().map(|v| v * 0.8));
         rec.extend(vec![0.0; samples_for(0.1, RATE)]);
         pews.push((rec.len() as f64 / f64::from(RATE), factor));
