@@ -4,8 +4,8 @@
 # performs in the same room), every truth file as it is. A check that the detector
 # holds up in rooms that no dev set has.
 #
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE]]
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE [sequences]]]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
@@ -18,9 +18,12 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gate OVER_DB [HOLD_SECONDS]
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
-# reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100).
+# reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100);
+# with `sequences`, the sequences alone, the takes only as much quieter as the chain
+# makes the sequences (enrolled close to the microphone, performed in the room).
 # noise: sox's TYPE (whitenoise, pinknoise, brownnoise) at LEVEL_DB (its peaks that
-# far under full scale) added to each file.
+# far under full scale) added to each file; `sequences` as for reverb (enrolled in a
+# quiet room).
 # hum: mains buzz (a ground loop, a lamp's dimmer) of FREQUENCY Hz and its harmonics up
 # to the 8th, the k-th at 1/k of the fundamental (a sawtooth's spectrum), its peaks
 # LEVEL_DB under full scale, added to each file.
@@ -55,7 +58,7 @@
 # All repeatable (sox -R).
 set -euo pipefail
 usage() {
-    sed -n '2,40p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,/^# All repeatable/p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
 }
 [ $# -ge 3 ] || usage
@@ -63,21 +66,30 @@ src=$1 out=$2 kind=$3
 shift 3
 case $kind in
     reverb)
-        [ $# -le 2 ] || usage
-        reverberance=${1:-50} room_scale=${2:-100}
+        [ $# -le 3 ] || usage
+        reverberance=${1:-50} room_scale=${2:-100} which=${3:-all}
+        case $which in
+            all | sequences) ;;
+            *) echo "room-sets.sh: reverb $reverberance $room_scale $which: expected nothing or 'sequences' after the room scale" >&2; exit 2 ;;
+        esac
         # 4 dB down first so that the tail added to the loudest hits does not clip;
         # 50 % HF damping and no pre-delay are sox's defaults. The files and the
         # impulse measured below go through this one chain.
         chain=(gain -4 reverb "$reverberance" 50 "$room_scale")
         ;;
     noise)
-        [ $# -eq 2 ] || usage
-        noise_type=$1 level_db=$2
+        [ $# -ge 2 ] && [ $# -le 3 ] || usage
+        noise_type=$1 level_db=$2 which=${3:-all}
+        case $which in
+            all | sequences) ;;
+            *) echo "room-sets.sh: noise $noise_type $level_db $which: expected nothing or 'sequences' after the level" >&2; exit 2 ;;
+        esac
         case $noise_type in
             whitenoise | pinknoise | brownnoise) ;;
             *) echo "room-sets.sh: noise type $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
         esac
         added="$noise_type, peaks $level_db dB"
+        [ "$which" = all ] || added="$added, the sequences alone"
         ;;
     hum)
         [ $# -eq 2 ] || usage
@@ -261,7 +273,11 @@ PY
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
         if [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
-            cp "$wav" "$out/$name/$rel"
+            if [ "$kind" = reverb ]; then
+                sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]:0:2}"
+            else
+                cp "$wav" "$out/$name/$rel"
+            fi
         elif [ "$kind" = reverb ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]}"
         elif [ "$kind" = mp3 ]; then
@@ -333,4 +349,6 @@ at = lambda level: next(i for i, d in enumerate(db) if d < level) / rate
 print(f"RT60 {3 * (at(-25) - at(-5)):.2f} s, direct to reverberant {10 * math.log10(sum(v * v for v in direct) / curve[0]):.1f} dB")
 PY
 )
-echo "room-sets.sh: $count sets in $out (reverberance $reverberance %, room scale $room_scale %: $room)"
+heard="every file"
+[ "$which" = all ] || heard="the sequences alone"
+echo "room-sets.sh: $count sets in $out (reverberance $reverberance %, room scale $room_scale %: $room; $heard)"
