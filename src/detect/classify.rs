@@ -189,6 +189,9 @@ pub(super) struct FiredInstance<'a> {
     pub(super) other: f32,
     /// Its pattern's threshold.
     pub(super) threshold: f32,
+    /// How near its pattern's takes lie to one another ([`super::enrol::takes_agreement`];
+    /// minus infinity for one take).
+    pub(super) takes_agree: f32,
     /// Whether it began over the tail of an impulse that fired.
     pub(super) over_fired_impulse: bool,
     /// Whether the speech guard's span before it held more than half the unrecognised
@@ -212,6 +215,15 @@ pub(super) struct FiredInstance<'a> {
 /// fed on its own decisions would carry one confusion on for good): the takes score
 /// it `confidence` over its threshold and over every other pattern. And it began out
 /// of quiet, since over a fired word's tail its features are partly that tail's.
+///
+/// Where a pattern was enrolled from several takes, they show how far its user's sound
+/// varies, and neither learns from an instance further from them than they lie from
+/// one another ([`super::enrol::takes_agreement`]): its score must reach theirs, over
+/// takes and tracked template for the template, over the takes alone to be kept. An
+/// instance further out is not clearly the sound; a syllable of speech that fired was
+/// one, and the syllables after it followed the template it taught
+/// (`docs/classify.md`, "How near its takes an instance must lie to teach
+/// tracking"). One take shows no spread, and the confidence alone is asked.
 ///
 /// Neither learns from an instance amid talk (more than half the unrecognised sound
 /// that closes the speech guard in the span before it): a syllable that passed the
@@ -277,14 +289,18 @@ impl Tracked {
         let (n, confident) = (self.features, self.params.confidence);
         let clear = !instance.over_fired_impulse
             && instance.take_score >= instance.threshold + confident
-            && instance.take_score >= instance.other + confident;
+            && instance.take_score >= instance.other + confident
+            && instance.take_score >= instance.takes_agree;
         if clear && self.params.recent > 0 {
             let slot = pattern * self.params.recent + self.recent_next[pattern];
             self.recent[slot * n..(slot + 1) * n].copy_from_slice(instance.features);
             self.recent_next[pattern] = (self.recent_next[pattern] + 1) % self.params.recent;
             self.recent_held[pattern] = (self.recent_held[pattern] + 1).min(self.params.recent);
         }
-        if instance.score < instance.threshold + confident || instance.score < instance.other {
+        if instance.score < instance.threshold + confident
+            || instance.score < instance.other
+            || instance.score < instance.takes_agree
+        {
             return;
         }
         let template = &mut self.templates[pattern * n..(pattern + 1) * n];
@@ -589,6 +605,7 @@ mod tests {
             take_score,
             other,
             threshold: 0.3,
+            takes_agree: f32::NEG_INFINITY,
             over_fired_impulse: false,
             amid_talk: false,
         }
@@ -654,6 +671,35 @@ mod tests {
         assert!(templates_of(&tracked).is_empty());
         tracked.follow(0, &fired(&x, 0.9, 0.9, 0.1));
         assert_eq!(templates_of(&tracked).len(), 2);
+    }
+
+    #[test]
+    fn an_instance_further_from_the_takes_than_they_lie_from_one_another_teaches_nothing() {
+        let mut tracked = Tracked::new(TrackParams::default(), 2, 3);
+        let x = unit(&[1.0, 0.0, 0.0]);
+        // Confident by the threshold and the other pattern, but its takes agree at 0.8.
+        let further = FiredInstance {
+            takes_agree: 0.8,
+            ..fired(&x, 0.75, 0.75, 0.1)
+        };
+        tracked.follow(0, &further);
+        assert!(templates_of(&tracked).is_empty());
+        // As near as they lie: it sets the template and is kept.
+        let as_near = FiredInstance {
+            takes_agree: 0.75,
+            ..fired(&x, 0.75, 0.75, 0.1)
+        };
+        tracked.follow(0, &as_near);
+        assert_eq!(templates_of(&tracked).len(), 2);
+        // Near the template, not the takes: it moves the template, is not kept.
+        let y = unit(&[1.0, 0.2, 0.0]);
+        let by_template = FiredInstance {
+            takes_agree: 0.8,
+            ..fired(&y, 0.9, 0.7, 0.1)
+        };
+        tracked.follow(0, &by_template);
+        assert_eq!(templates_of(&tracked).len(), 2);
+        assert_ne!(tracked.template(0), Some(&x[..]));
     }
 
     #[test]

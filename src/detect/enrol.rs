@@ -79,6 +79,57 @@ impl Template {
 /// (`docs/classify.md`, "Several takes enrolling").
 const TAKE_SHRINK: f32 = 2.0;
 
+/// How near each impulse pattern's takes lie to one another, scored as an instance is:
+/// each take, left out, against the pattern's other takes drawn `TAKE_SHRINK` times
+/// their own mean towards it, the best of them; the least over the takes. Several takes
+/// show how far their user's sound varies, and an instance further from them than
+/// that is not clearly it ([`super::classify::Tracked`]). Minus infinity for a held
+/// pattern and for an impulse pattern of one take, whose spread no enrolment shows.
+/// Called on the takes' features before [`shrink_takes_towards_their_mean`];
+/// allocates nothing (the bands compared can change while a stream runs).
+pub(super) fn takes_agreement(templates: &[Template], kinds: &[PatternKind], out: &mut [f32]) {
+    out.fill(f32::NEG_INFINITY);
+    let mut others_mean = [0.0f32; FEATURES];
+    let mut drawn = [0.0f32; FEATURES];
+    for (pi, kind) in kinds.iter().enumerate() {
+        if *kind != PatternKind::Impulse {
+            continue;
+        }
+        let takes = || {
+            templates
+                .iter()
+                .enumerate()
+                .filter(move |(_, t)| t.pattern == pi && !t.second_placement)
+        };
+        let mut least = f32::INFINITY;
+        for (left_out, take) in takes() {
+            let others = || takes().filter(move |&(j, _)| j != left_out);
+            if others().next().is_none() {
+                break;
+            }
+            others_mean.fill(0.0);
+            for (_, other) in others() {
+                for (m, x) in others_mean.iter_mut().zip(&other.features) {
+                    *m += x;
+                }
+            }
+            scale_to_unit(&mut others_mean);
+            let mut best = f32::NEG_INFINITY;
+            for (_, other) in others() {
+                for ((d, x), m) in drawn.iter_mut().zip(&other.features).zip(&others_mean) {
+                    *d = x + TAKE_SHRINK * m;
+                }
+                scale_to_unit(&mut drawn);
+                best = best.max(similarity(&drawn, &take.features));
+            }
+            least = least.min(best);
+        }
+        if least.is_finite() {
+            out[pi] = least;
+        }
+    }
+}
+
 /// Moves every impulse pattern's take features `TAKE_SHRINK` times their pattern's mean
 /// towards it. Held patterns are left as enrolled: a swelling take gives them two
 /// templates on purpose, its soft start and its full sound.
@@ -615,6 +666,66 @@ mod tests {
             later_power: t.later_power,
             later_energy: t.later_energy,
         }
+    }
+
+    /// A take of pattern `pattern` with the given features (unit norm) and nothing else.
+    fn take_of(pattern: usize, features: &[f32]) -> Template {
+        let mut padded = vec![0.0; FEATURES];
+        padded[..features.len()].copy_from_slice(features);
+        scale_to_unit(&mut padded);
+        Template {
+            pattern,
+            second_placement: false,
+            features: padded,
+            pooled_power: vec![0.0; BANDS],
+            drawn_towards: None,
+            early_energy: 0.0,
+            length_after_onset: 0,
+            after_earlier: 0,
+            later_power: Vec::new(),
+            later_energy: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn takes_agree_as_far_as_the_least_typical_one_lies_from_the_others() {
+        let kinds = [
+            PatternKind::Impulse,
+            PatternKind::Impulse,
+            PatternKind::Impulse,
+            PatternKind::Continuous,
+        ];
+        let mut templates = vec![
+            // Pattern 0: two takes at an angle whose cosine is 0.6; each, left out,
+            // meets the other alone, drawn towards itself.
+            take_of(0, &[1.0, 0.0]),
+            take_of(0, &[0.6, 0.8]),
+            // Pattern 1: one take, and a second placement of it, which is no take.
+            take_of(1, &[0.0, 0.0, 1.0]),
+            // Pattern 2: three takes, two alike and one apart.
+            take_of(2, &[0.0, 0.0, 0.0, 1.0]),
+            take_of(2, &[0.0, 0.0, 0.0, 1.0]),
+            take_of(2, &[0.0, 0.0, 0.0, 0.0, 1.0]),
+            // A held pattern's two templates (its soft start and its sound).
+            take_of(3, &[1.0]),
+            take_of(3, &[0.0, 1.0]),
+        ];
+        templates.push(Template {
+            second_placement: true,
+            ..take_of(1, &[0.0, 1.0])
+        });
+        let mut agree = [0.0; 4];
+        takes_agreement(&templates, &kinds, &mut agree);
+        assert!((agree[0] - 0.6).abs() < 1e-6, "{agree:?}");
+        assert_eq!(agree[1], f32::NEG_INFINITY);
+        assert_eq!(agree[3], f32::NEG_INFINITY);
+        // The take apart, left out, meets the mean of the two alike: drawn towards
+        // that mean, each is that mean, at right angles to it.
+        assert!(agree[2].abs() < 1e-6, "{agree:?}");
+        // Each of the two alike, left out, finds the other as it is.
+        templates.truncate(5);
+        takes_agreement(&templates, &kinds[..3], &mut agree[..3]);
+        assert!((agree[2] - 1.0).abs() < 1e-6, "{agree:?}");
     }
 
     #[test]

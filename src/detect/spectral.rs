@@ -81,8 +81,8 @@ use super::context::{Before, Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
-    takes_carry_under_hz, window_power, Separating, TakeFeatures, Template, SOFT_ONSET_GAP_SECONDS,
-    SOFT_ONSET_RANGE_DB,
+    takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, Template,
+    SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Wait};
 use super::features::{
@@ -409,6 +409,9 @@ pub struct SpectralMatcher {
     /// The impulse of each pattern as its user has lately made it, scored as its takes
     /// are ([`Tracked`]).
     tracked: Tracked,
+    /// How near each pattern's takes lie to one another ([`takes_agreement`]), which
+    /// an instance must reach to teach tracking.
+    takes_agree: Vec<f32>,
     /// Per pattern, the scores of the onset being classified.
     pattern_scores: Vec<PatternScore>,
     /// The instance's features at the shift that scored best.
@@ -713,6 +716,7 @@ impl SpectralMatcher {
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
             tracked: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
+            takes_agree: vec![f32::NEG_INFINITY; n_patterns],
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
@@ -770,7 +774,8 @@ impl SpectralMatcher {
     }
 
     /// Makes everything that depends on the bands compared again for the first
-    /// `bands`: the cepstrum, the takes' features and their shrink, the held patterns'
+    /// `bands`: the cepstrum, the takes' features, how near they lie to one another and
+    /// their shrink, the held patterns'
     /// spectra, the pairs' waits, the background's features; the tracked templates
     /// and kept instances start again. Allocates nothing: called while a stream runs,
     /// when it turns out to carry fewer bands than the takes ([`Passband`]).
@@ -781,6 +786,7 @@ impl SpectralMatcher {
         for t in &mut self.templates {
             features_of_power(&t.pooled_power, cepstrum, &mut t.features);
         }
+        takes_agreement(&self.templates, &self.kinds, &mut self.takes_agree);
         shrink_takes_towards_their_mean(&mut self.templates, &self.kinds);
         for info in &mut self.patterns {
             info.sustain.copy_from_slice(&info.mean_frame);
@@ -1848,6 +1854,7 @@ impl SpectralMatcher {
             take_score: self.pattern_scores[pi].take_score,
             other,
             threshold: self.patterns[pi].threshold,
+            takes_agree: self.takes_agree[pi],
             over_fired_impulse,
             amid_talk,
         };
