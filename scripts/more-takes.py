@@ -22,20 +22,7 @@ build.sh makes it).
 import pathlib
 import sys
 
-HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
-import build  # noqa: E402  (the development sets' generator)
-
-BUILDERS = [
-    build.d1_zingerbox,
-    lambda out: build.d1_mitrank(out, "a"),
-    lambda out: build.d1_mitrank(out, "b"),
-    build.d1_agh,
-    build.d1_noise,
-    build.d2_agh_isolated,
-    build.d6_knocks,
-    build.n_speech_real,
-]
+from real_sets import BUILDERS, build
 
 
 def main():
