@@ -19,18 +19,11 @@ enrol. Uses the generator of ../shared/devsets (its venv, with numpy and soundfi
 build.sh makes it).
 """
 
-import pathlib
-import sys
-
-from real_sets import BUILDERS, build
+from real_sets import arguments, build, build_all
 
 
 def main():
-    if len(sys.argv) != 3 or not sys.argv[1].isdigit() or int(sys.argv[1]) < 2:
-        sys.exit(__doc__)
-    n = int(sys.argv[1])
-    out = pathlib.Path(sys.argv[2])
-    out.mkdir(parents=True, exist_ok=True)
+    n, out = arguments(2, __doc__)
     enrol = build.enrol
     save_set = build.save_set
     # The takes 2..N of the set being built, cut as the first is: {label: [signal, ...]}.
@@ -58,11 +51,7 @@ def main():
             for k, x in enumerate(takes, start=2):
                 build.write(folder / "more_takes" / f"{label}-{k}.wav", x, sr)
 
-    # The builders look these up in their module at call time.
-    build.enrol = enrol_first_takes
-    build.save_set = save_set_with_more_takes
-    for builder in BUILDERS:
-        builder(out)
+    build_all(out, enrol_first_takes, save_set_with_more_takes)
 
 
 if __name__ == "__main__":

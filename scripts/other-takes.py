@@ -20,18 +20,12 @@ Keep it a check: a setting chosen on these sets is fitted to them as well.
 """
 
 import inspect
-import pathlib
-import sys
 
-from real_sets import BUILDERS, build
+from real_sets import arguments, build, build_all
 
 
 def main():
-    if len(sys.argv) != 3 or not sys.argv[1].isdigit() or int(sys.argv[1]) < 1:
-        sys.exit(__doc__)
-    shift = int(sys.argv[1])
-    out = pathlib.Path(sys.argv[2])
-    out.mkdir(parents=True, exist_ok=True)
+    shift, out = arguments(1, __doc__)
     enrol = build.enrol
 
     def enrol_other_take(classes, *args, **kwargs):
@@ -48,11 +42,7 @@ def main():
         bound.arguments["about"] += f" (here each label's take {shift + 1} enrols instead: scripts/other-takes.py)"
         return save_set(*bound.args, **bound.kwargs)
 
-    # The builders look these up in their module at call time.
-    build.enrol = enrol_other_take
-    build.save_set = save_set_saying_so
-    for builder in BUILDERS:
-        builder(out)
+    build_all(out, enrol_other_take, save_set_saying_so)
 
 
 if __name__ == "__main__":

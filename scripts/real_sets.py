@@ -1,7 +1,7 @@
 """The development sets' generator (../shared/devsets/build.py) and the builders of its
 sets of real takes, for the scripts that build those sets enrolled otherwise
-(`other-takes.py`, `more-takes.py`). They patch `build.enrol` and `build.save_set`,
-which the builders look up in their module at call time."""
+(`other-takes.py`, `more-takes.py`), which replace `build.enrol` and `build.save_set`
+([`build_all`])."""
 
 import pathlib
 import sys
@@ -22,3 +22,22 @@ BUILDERS = [
     build.d6_knocks,
     build.n_speech_real,
 ]
+
+
+def build_all(out, enrol, save_set):
+    """Builds every set of BUILDERS into `out`, with `enrol` and `save_set` in place of
+    the generator's (each builder looks them up in its module at call time)."""
+    build.enrol = enrol
+    build.save_set = save_set
+    for builder in BUILDERS:
+        builder(out)
+
+
+def arguments(least, usage):
+    """The command line `NUMBER DIR` (NUMBER at least `least`; else exit with `usage`):
+    the number and the folder, made if missing."""
+    if len(sys.argv) != 3 or not sys.argv[1].isdigit() or int(sys.argv[1]) < least:
+        sys.exit(usage)
+    out = pathlib.Path(sys.argv[2])
+    out.mkdir(parents=True, exist_ok=True)
+    return int(sys.argv[1]), out
