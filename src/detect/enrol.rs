@@ -19,6 +19,9 @@ use crate::config::{DetectorSettings, PatternKind};
 
 pub(super) struct Template {
     pub(super) pattern: usize,
+    /// Which take it was enrolled from (numbered over every pattern's takes): a take
+    /// placed twice gives two templates of one take.
+    pub(super) take: usize,
     /// Enrolled from a second placement of a take's onset (a quiet room's, or a held
     /// sound's soft start): left out of `shrink_takes_towards_their_mean`, which is
     /// for different takes.
@@ -195,16 +198,21 @@ pub(super) fn window_power(
 const PARTING_DROP: f32 = 0.02;
 
 /// For every ordered pair of impulse patterns (`patterns` × `patterns`, row-major):
-/// over how many decision windows a choice between the two is made. Two patterns
-/// whose takes look alike over one window (similarity `alike` or more, the best pair
-/// of takes) are told apart over the fewest windows, up to `max_windows`, after which
-/// no pair of their takes is that alike any more: a spoken "pop" and "pew" share their
-/// first 25 ms (the "p" and its release) and part with their vowels. A pair whose
-/// takes stay that alike over every window allowed, but are at least `PARTING_DROP`
-/// less alike over some of them than over one (a voice whose "p" lasts nearly as long
-/// as the wait), is decided over the windows that part it most. A pair that
-/// stays alike however long it is heard (two knocks on one table) gains nothing by
-/// waiting, and gets 1, as does every pair that is not alike to begin with.
+/// over how many decision windows a choice between the two is made. Two takes, one of
+/// each, that look alike over one window (similarity `alike` or more, the most alike
+/// of their placements) are told apart over the fewest windows, up to `max_windows`,
+/// after which they are not that alike any more: a spoken "pop" and "pew" share their
+/// first 25 ms (the "p" and its release) and part with their vowels. Two takes that
+/// stay that alike over every window allowed, but are at least `PARTING_DROP` less
+/// alike over some of them than over one (a voice whose "p" lasts nearly as long as the
+/// wait), are told apart over the windows that part them most. Two that stay alike
+/// however long they are heard (two knocks on one table) gain nothing by waiting, and
+/// get 1, as do two that are not alike to begin with. Two patterns are told apart where
+/// every pair of their takes that waiting can part is (the most alike pair over each
+/// window); a pair that stays alike however long is left out, so that of three takes of
+/// a "pop" and three of a "pew", one pair said slowly enough that its "p" outlasts the
+/// wait does not keep the others from being told apart (`docs/classify.md`, "Patterns
+/// alike, enrolled from several takes"). With one take each, the one pair decides.
 ///
 /// Made with the templates, so that the waits can be made again without allocating
 /// when the stream turns out to carry fewer bands than the takes.
@@ -214,8 +222,11 @@ pub(super) struct Separating {
     max_windows: usize,
     /// Each take's features over 1..=max_windows windows.
     features: Vec<f32>,
-    /// Per ordered pair of patterns and window, their most alike takes' similarity.
+    /// Per ordered pair of patterns and window, their most alike takes' similarity,
+    /// of the pairs of takes that waiting can part.
     most_alike: Vec<f32>,
+    /// One pair of takes' similarity over 1..=max_windows windows.
+    pair_alike: Vec<f32>,
 }
 
 impl Separating {
@@ -233,6 +244,7 @@ impl Separating {
             max_windows,
             features: vec![0.0; templates * max_windows * FEATURES],
             most_alike: vec![0.0; patterns * patterns * max_windows],
+            pair_alike: vec![0.0; max_windows],
         }
     }
 
@@ -263,41 +275,74 @@ impl Separating {
         let of = |t: usize, w: usize| &features[(t * max_windows + w - 1) * FEATURES..][..FEATURES];
         let most_alike = &mut self.most_alike[..n * n * max_windows];
         most_alike.fill(f32::NEG_INFINITY);
-        for (i, ta) in templates.iter().enumerate() {
-            for (j, tb) in templates.iter().enumerate().skip(i + 1) {
-                let (p, q) = (ta.pattern, tb.pattern);
-                if p == q || kinds[p] != PatternKind::Impulse || kinds[q] != PatternKind::Impulse {
+        let pair_alike = &mut self.pair_alike[..max_windows];
+        let takes = templates.iter().map(|t| t.take + 1).max().unwrap_or(0);
+        let of_take = |take: usize| {
+            templates
+                .iter()
+                .enumerate()
+                .filter(move |(_, t)| t.take == take)
+        };
+        for a in 0..takes {
+            for b in a + 1..takes {
+                // Two takes are as alike as the most alike of their placements.
+                pair_alike.fill(f32::NEG_INFINITY);
+                let mut patterns = None;
+                for (i, ta) in of_take(a) {
+                    for (j, tb) in of_take(b) {
+                        let (p, q) = (ta.pattern, tb.pattern);
+                        if p == q
+                            || kinds[p] != PatternKind::Impulse
+                            || kinds[q] != PatternKind::Impulse
+                        {
+                            continue;
+                        }
+                        patterns = Some((p, q));
+                        for (w, s) in pair_alike.iter_mut().enumerate() {
+                            *s = s.max(similarity(of(i, w + 1), of(j, w + 1)));
+                        }
+                    }
+                }
+                let Some((p, q)) = patterns else { continue };
+                // Waiting gains such a pair nothing: it does not keep the others from
+                // being told apart.
+                if pair_alike[0] >= alike && windows_that_part(pair_alike, alike) == 1 {
                     continue;
                 }
-                for w in 1..=max_windows {
-                    let s = similarity(of(i, w), of(j, w));
-                    for (x, y) in [(p, q), (q, p)] {
-                        let m = &mut most_alike[(x * n + y) * max_windows + w - 1];
+                for (x, y) in [(p, q), (q, p)] {
+                    let m = &mut most_alike[(x * n + y) * max_windows..][..max_windows];
+                    for (m, &s) in m.iter_mut().zip(pair_alike.iter()) {
                         *m = m.max(s);
                     }
                 }
             }
         }
         for (pair, windows) in out.iter_mut().enumerate().take(n * n) {
-            let by_window = &most_alike[pair * max_windows..(pair + 1) * max_windows];
-            *windows = if by_window[0] < alike {
-                1
-            } else if let Some(w) = by_window.iter().position(|&s| s < alike) {
-                (w + 1) as u8
-            } else {
-                let mut most_parted = 0;
-                for (w, &s) in by_window.iter().enumerate() {
-                    if s < by_window[most_parted] {
-                        most_parted = w;
-                    }
-                }
-                let least_alike = by_window[most_parted];
-                if least_alike <= by_window[0] - PARTING_DROP {
-                    (most_parted + 1) as u8
-                } else {
-                    1
-                }
-            };
+            *windows = windows_that_part(&most_alike[pair * max_windows..][..max_windows], alike);
+        }
+    }
+}
+
+/// Over how many windows two takes whose similarities over 1, 2, ... windows are
+/// `by_window` are told apart ([`Separating`]): 1 if they are not alike to begin with;
+/// the fewest after which they are not; the windows that part them most, if they stay
+/// alike but part by `PARTING_DROP`; 1 if they stay alike however long.
+fn windows_that_part(by_window: &[f32], alike: f32) -> u8 {
+    if by_window[0] < alike {
+        1
+    } else if let Some(w) = by_window.iter().position(|&s| s < alike) {
+        (w + 1) as u8
+    } else {
+        let mut most_parted = 0;
+        for (w, &s) in by_window.iter().enumerate() {
+            if s < by_window[most_parted] {
+                most_parted = w;
+            }
+        }
+        if by_window[most_parted] <= by_window[0] - PARTING_DROP {
+            (most_parted + 1) as u8
+        } else {
+            1
         }
     }
 }
@@ -656,6 +701,7 @@ mod tests {
         let t = take_features(analyzer, take, 5, 0);
         Template {
             pattern,
+            take: pattern,
             second_placement: false,
             features: t.features,
             pooled_power: t.pooled_power,
@@ -675,6 +721,7 @@ mod tests {
         scale_to_unit(&mut padded);
         Template {
             pattern,
+            take: 0,
             second_placement: false,
             features: padded,
             pooled_power: vec![0.0; BANDS],
@@ -800,6 +847,46 @@ mod tests {
         assert_eq!(wait(0.045, 3), 1);
         // Over the first two windows the vowels have not begun: nothing parts them.
         assert_eq!(wait(0.042, 2), 1);
+    }
+
+    #[test]
+    fn a_pair_of_takes_that_never_parts_does_not_keep_the_others_from_waiting() {
+        let rate = f64::from(settings().sample_rate);
+        let mut analyzer = Analyzer::new(rate);
+        // Two takes each of a "pop" and a "pew": said briskly (a 20 ms "p"), they part
+        // within three windows; said slowly (a "p" of 60 ms), they stay alike over all
+        // three, and waiting makes them no less alike.
+        let said = |burst_seconds: f64, hz: f64| -> Vec<f32> {
+            let burst = white_noise((burst_seconds * rate) as usize, 0.3, 5);
+            burst
+                .into_iter()
+                .chain(tone(rate, 150.0, hz, 0.5))
+                .collect()
+        };
+        let takes = [
+            (0, said(0.02, 250.0)),
+            (0, said(0.06, 250.0)),
+            (1, said(0.02, 2500.0)),
+            (1, said(0.06, 2500.0)),
+        ];
+        let kinds = [PatternKind::Impulse; 2];
+        let mut wait_of = |which: &[usize]| {
+            let templates: Vec<Template> = which
+                .iter()
+                .map(|&k| Template {
+                    take: k,
+                    ..template(&mut analyzer, &takes[k].1, takes[k].0)
+                })
+                .collect();
+            let w = waits(&templates, &kinds, &analyzer.cepstrum, 3);
+            assert_eq!(w[1], w[2], "{w:?}");
+            w[1]
+        };
+        let brisk = wait_of(&[0, 2]);
+        assert!(brisk > 1, "{brisk}");
+        assert_eq!(wait_of(&[1, 3]), 1);
+        // All four: the slow pair is left out, the brisk one decides.
+        assert_eq!(wait_of(&[0, 1, 2, 3]), brisk);
     }
 
     #[test]

@@ -560,6 +560,7 @@ impl SpectralMatcher {
         let mut infos = Vec::new();
         // Impulse takes and their onsets, for the copies stage.
         let mut copy_takes = Vec::new();
+        let mut takes_so_far = 0;
         for (pi, p) in patterns.iter().enumerate() {
             let mut sustain = vec![0.0f32; BANDS];
             let mut sustain_frames = 0usize;
@@ -598,6 +599,7 @@ impl SpectralMatcher {
                     } = take_features(&mut analyzer, &take.samples, decision_frames, start);
                     templates.push(Template {
                         pattern: pi,
+                        take: takes_so_far,
                         second_placement,
                         features,
                         pooled_power,
@@ -619,6 +621,7 @@ impl SpectralMatcher {
                     // The held spectrum is taken from the later start.
                     sustained = Some((mean_frame, mean_frames));
                 }
+                takes_so_far += 1;
                 let (mean_frame, n) = sustained.unwrap_or_default();
                 for (s, m) in sustain.iter_mut().zip(&mean_frame) {
                     *s += m * n as f32;
