@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::audio::{AudioError, ChannelSelect, WavSource};
 use crate::config::Config;
 use crate::detect::waveform::TakeTrace;
-use crate::detect::{DetectError, Detector, Event, HeldEndRecord, MatchedBy, OnsetRecord};
+use crate::detect::{DetectError, Detector, Event, HeldEndRecord, MatchedBy, OnsetRecord, Taught};
 use crate::pattern::{self, PatternError};
 use crate::solver::{self, Contact};
 
@@ -241,12 +241,13 @@ pub fn write_held_ends(out: &mut dyn Write, ends: &[HeldEndRecord]) -> std::io::
 /// (marked `*` when it began over an impulse that fired), over such a word's tail the
 /// share of its sound its pattern's takes explain there (`new`), how much of its sound
 /// the choice of its pattern heard, what of its best pattern it resembled most (a take,
-/// the tracked template or a kept instance), and what became of it, with the sound held
-/// against it when there is one (`--explain`, on stderr).
+/// the tracked template or a kept instance), for an impulse that fired what it taught
+/// tracking, and what became of it, with the sound held against it when there is one
+/// (`--explain`, on stderr).
 pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  outcome",
+        "{:>9}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {:<9}  outcome",
         "onset s",
         "best",
         "score",
@@ -257,7 +258,8 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
         "rise dB",
         "new",
         "heard ms",
-        "by"
+        "by",
+        "taught"
     )?;
     for r in onsets {
         let name = |n: &Option<std::sync::Arc<str>>| n.as_deref().unwrap_or("-").to_string();
@@ -271,7 +273,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
         });
         writeln!(
             out,
-            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {}{}{}",
+            "{:>9.4}  {:<12} {:>5}  {:<12} {:>5}  {:>8}  {:>6}  {:>7}  {:>4}  {:>8}  {:<7}  {:<9}  {}{}{}",
             r.time,
             name(&r.best),
             num(r.best_score),
@@ -287,6 +289,7 @@ pub fn write_explain(out: &mut dyn Write, onsets: &[OnsetRecord]) -> std::io::Re
             r.window_seconds
                 .map_or("-".to_string(), |v| format!("{:.0}", 1000.0 * v)),
             r.matched_by.map_or("-", MatchedBy::as_str),
+            r.taught.map_or("-", Taught::as_str),
             r.outcome.as_str(),
             if r.guard_by_stopped_speech { "*" } else { "" },
             because_of,

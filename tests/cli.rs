@@ -903,6 +903,12 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             "{o}"
         );
     }
+    // Whether an impulse event has its time at `t`.
+    let impulse_at = |t: f64| {
+        events
+            .iter()
+            .any(|e| e["kind"] == "impulse" && (e["time"].as_f64().unwrap() - t).abs() < 1e-4)
+    };
     // Every scored onset says how much of its sound the choice of its pattern heard:
     // about the decision window (25 ms) here, where no two patterns begin alike, or
     // two over a fired word's tail, where what a take adds to it is judged.
@@ -930,16 +936,28 @@ fn explain_lists_every_onset_with_what_became_of_it() {
             .as_str()
             .unwrap_or_else(|| panic!("no matched_by: {o}"));
         assert!(["take", "tracked", "kept"].contains(&by), "{o}");
+        // An impulse that fired says what it taught tracking; nothing else does.
+        let fired_impulse = o["outcome"] == "fired" && impulse_at(o["time"].as_f64().unwrap());
+        let taught = o["taught"].as_str();
+        assert_eq!(fired_impulse, taught.is_some(), "{o}");
+        if let Some(taught) = taught {
+            assert!(
+                [
+                    "template_and_kept",
+                    "template",
+                    "nothing_amid_talk",
+                    "nothing_unsure",
+                    "nothing_further_than_takes"
+                ]
+                .contains(&taught),
+                "{o}"
+            );
+        }
     }
     // The sound the deciding stage held against an onset, where one did: the impulse
     // that fired and whose own later sound it is, or that it repeats, from its event's
     // time; the sound before it, for the guard; nothing for the gates that judge the onset
     // alone.
-    let impulse_at = |t: f64| {
-        events
-            .iter()
-            .any(|e| e["kind"] == "impulse" && (e["time"].as_f64().unwrap() - t).abs() < 1e-4)
-    };
     let mut continued = 0;
     for o in onsets.iter().filter(|o| o["outcome"] != "fired") {
         let time = o["time"].as_f64().unwrap();

@@ -14,6 +14,7 @@
 //! power spectrum, scaled to the onset's sound, plus the room's noise. In a quiet room
 //! that is the take as enrolled.
 
+use super::explain::Taught;
 use super::features::{
     features_of_power, scale_to_unit, Analyzer, Cepstrum, BANDS, POOLED_RANGE_DB,
 };
@@ -281,27 +282,30 @@ impl Tracked {
             .map(move |slot| &self.recent[slot * n..(slot + 1) * n])
     }
 
-    /// An instance that fired as `pattern`.
-    pub(super) fn follow(&mut self, pattern: usize, instance: &FiredInstance) {
+    /// An instance that fired as `pattern`: what it taught.
+    pub(super) fn follow(&mut self, pattern: usize, instance: &FiredInstance) -> Taught {
         if instance.amid_talk {
-            return;
+            return Taught::NothingAmidTalk;
         }
         let (n, confident) = (self.features, self.params.confidence);
+        if instance.score < instance.threshold + confident || instance.score < instance.other {
+            return Taught::NothingUnsure;
+        }
+        if instance.score < instance.takes_agree {
+            return Taught::NothingFurtherThanTakes;
+        }
+        // Its score is over its takes and the template alike, so what its takes alone
+        // find clear the template does too.
         let clear = !instance.over_fired_impulse
             && instance.take_score >= instance.threshold + confident
             && instance.take_score >= instance.other + confident
-            && instance.take_score >= instance.takes_agree;
-        if clear && self.params.recent > 0 {
+            && instance.take_score >= instance.takes_agree
+            && self.params.recent > 0;
+        if clear {
             let slot = pattern * self.params.recent + self.recent_next[pattern];
             self.recent[slot * n..(slot + 1) * n].copy_from_slice(instance.features);
             self.recent_next[pattern] = (self.recent_next[pattern] + 1) % self.params.recent;
             self.recent_held[pattern] = (self.recent_held[pattern] + 1).min(self.params.recent);
-        }
-        if instance.score < instance.threshold + confident
-            || instance.score < instance.other
-            || instance.score < instance.takes_agree
-        {
-            return;
         }
         let template = &mut self.templates[pattern * n..(pattern + 1) * n];
         if self.set[pattern] {
@@ -312,6 +316,11 @@ impl Tracked {
         } else {
             template.copy_from_slice(instance.features);
             self.set[pattern] = true;
+        }
+        if clear {
+            Taught::TemplateAndKept
+        } else {
+            Taught::Template
         }
     }
 }
@@ -667,9 +676,12 @@ mod tests {
             amid_talk: true,
             ..fired(&x, 0.9, 0.9, 0.1)
         };
-        tracked.follow(0, &amid_talk);
+        assert_eq!(tracked.follow(0, &amid_talk), Taught::NothingAmidTalk);
         assert!(templates_of(&tracked).is_empty());
-        tracked.follow(0, &fired(&x, 0.9, 0.9, 0.1));
+        assert_eq!(
+            tracked.follow(0, &fired(&x, 0.9, 0.9, 0.1)),
+            Taught::TemplateAndKept
+        );
         assert_eq!(templates_of(&tracked).len(), 2);
     }
 
@@ -682,14 +694,14 @@ mod tests {
             takes_agree: 0.8,
             ..fired(&x, 0.75, 0.75, 0.1)
         };
-        tracked.follow(0, &further);
+        assert_eq!(tracked.follow(0, &further), Taught::NothingFurtherThanTakes);
         assert!(templates_of(&tracked).is_empty());
         // As near as they lie: it sets the template and is kept.
         let as_near = FiredInstance {
             takes_agree: 0.75,
             ..fired(&x, 0.75, 0.75, 0.1)
         };
-        tracked.follow(0, &as_near);
+        assert_eq!(tracked.follow(0, &as_near), Taught::TemplateAndKept);
         assert_eq!(templates_of(&tracked).len(), 2);
         // Near the template, not the takes: it moves the template, is not kept.
         let y = unit(&[1.0, 0.2, 0.0]);
@@ -697,7 +709,7 @@ mod tests {
             takes_agree: 0.8,
             ..fired(&y, 0.9, 0.7, 0.1)
         };
-        tracked.follow(0, &by_template);
+        assert_eq!(tracked.follow(0, &by_template), Taught::Template);
         assert_eq!(templates_of(&tracked).len(), 2);
         assert_ne!(tracked.template(0), Some(&x[..]));
     }

@@ -64,6 +64,8 @@ pub struct OnsetRecord {
     /// template or a kept instance.
     pub matched_by: Option<MatchedBy>,
     pub outcome: Outcome,
+    /// An impulse that fired: what it taught its pattern's tracking, or why nothing.
+    pub taught: Option<Taught>,
     /// The sound that the stage which decided held against it: for `speech_guard`, the
     /// sound no pattern recognised that closed the guard (the first and last of its
     /// frames counted); for `continuation`, the impulse whose own later sound it is
@@ -157,6 +159,38 @@ impl MatchedBy {
     }
 }
 
+/// What a fired impulse taught its pattern's tracking ([`OnsetRecord::taught`];
+/// [`Tracked`](super::classify::Tracked)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Taught {
+    /// It moved (or set) the tracked template and is kept as it was.
+    TemplateAndKept,
+    /// It moved the tracked template; it is not kept (it began over a fired word's
+    /// tail, or its takes alone do not find it clearly).
+    Template,
+    /// Nothing: it was heard amid talk.
+    NothingAmidTalk,
+    /// Nothing: it is not confident (its pattern's threshold plus the confidence, or
+    /// another pattern, is as high).
+    NothingUnsure,
+    /// Nothing: it lies further from its pattern's takes than they lie from one another.
+    NothingFurtherThanTakes,
+}
+
+impl Taught {
+    /// The name `--explain` prints.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::TemplateAndKept => "both",
+            Self::Template => "template",
+            Self::NothingAmidTalk => "no:talk",
+            Self::NothingUnsure => "no:unsure",
+            Self::NothingFurtherThanTakes => "no:takes",
+        }
+    }
+}
+
 impl OnsetRecord {
     /// An onset at `time`, decided at `decided_at`, with nothing scored.
     pub(super) fn unscored(time: f64, decided_at: f64, outcome: Outcome) -> Self {
@@ -177,6 +211,7 @@ impl OnsetRecord {
             waited_for: None,
             matched_by: None,
             outcome,
+            taught: None,
             because_of: None,
         }
     }

@@ -35,7 +35,7 @@ use crate::audio::{resample_clip, AudioError, ChannelSelect, StreamResampler, Wa
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 use background::BackgroundModel;
-pub use explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Wait};
+pub use explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 pub use gates::Outcome;
 pub use held::HeldEnd;
 pub use spectral::{AlikePair, SpectralMatcher};

@@ -84,7 +84,7 @@ use super::enrol::{
     takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, Template,
     SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
-use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Wait};
+use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 use super::features::{
     features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity, top_hz,
     Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
@@ -1290,7 +1290,10 @@ impl SpectralMatcher {
             }
             return None;
         }
-        self.fire(&decision, out);
+        let taught = self.fire(&decision, out);
+        if let Some(record) = self.explain.as_mut().and_then(|r| r.last_mut()) {
+            record.taught = taught;
+        }
         None
     }
 
@@ -1326,6 +1329,8 @@ impl SpectralMatcher {
             waited_for: d.waited_for,
             matched_by: Some(self.pattern_scores[pi].matched_by),
             outcome: d.outcome,
+            // Known once it has fired.
+            taught: None,
             because_of: self
                 .because_of(d.outcome, d.time_sample, d.peak, d.guard)
                 .map(|span| self.sound_span(span)),
@@ -1379,8 +1384,8 @@ impl SpectralMatcher {
 
     /// Fires the onset's pattern: its event (an impulse, or the begin of a held sound,
     /// which the held stage then follows), and what the context, tracking and the copies
-    /// stage keep of it.
-    fn fire(&mut self, d: &Decision, out: &mut Vec<Event>) {
+    /// stage keep of it; for an impulse, what it taught tracking.
+    fn fire(&mut self, d: &Decision, out: &mut Vec<Event>) -> Option<Taught> {
         let (pi, time_sample, onset_frame) = (d.pattern, d.time_sample, d.onset_frame);
         let Evidence {
             best_score,
@@ -1429,11 +1434,13 @@ impl SpectralMatcher {
             onset_frame,
             strength,
         });
-        if kind == PatternKind::Impulse {
-            self.track(pi, over_fired_impulse, !d.clear_of_talk);
+        let taught = (kind == PatternKind::Impulse).then(|| {
+            let taught = self.track(pi, over_fired_impulse, !d.clear_of_talk);
             self.copies.fired(time_sample, pi);
-        }
+            taught
+        });
         out.push(decided);
+        taught
     }
 
     /// The event of pattern `pi` whose onset is at `time_sample`, decided now.
@@ -1842,8 +1849,9 @@ impl SpectralMatcher {
 
     /// Lets the tracked templates of `pi`, which fired, follow this instance
     /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail,
-    /// `amid_talk` if it was not heard clear of talk ([`Context::guard`]).
-    fn track(&mut self, pi: usize, over_fired_impulse: bool, amid_talk: bool) {
+    /// `amid_talk` if it was not heard clear of talk ([`Context::guard`]). What it
+    /// taught.
+    fn track(&mut self, pi: usize, over_fired_impulse: bool, amid_talk: bool) -> Taught {
         let other = self
             .pattern_scores
             .iter()
@@ -1861,7 +1869,7 @@ impl SpectralMatcher {
             over_fired_impulse,
             amid_talk,
         };
-        self.tracked.follow(pi, &instance);
+        self.tracked.follow(pi, &instance)
     }
 
     /// Energy of the samples (received so far) of the decision window from
