@@ -532,6 +532,9 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
                 p.threshold
             );
         }
+        for spread in pattern::takes_spread(&patterns, &lane.detector)? {
+            let _ = writeln!(err, "{who}{spread}");
+        }
         for (path, model) in crate::detect::own_background(&lane.detector)? {
             let _ = writeln!(
                 err,

@@ -299,6 +299,61 @@ pub fn takes_carry_under_hz(patterns: &[Pattern], settings: &DetectorSettings) -
     crate::detect::spectral::compared_top_hz(patterns, settings, settings.sample_rate)
 }
 
+/// How near one another an impulse pattern's takes lie (`check` and `record` say so).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TakesSpread {
+    pub pattern: Arc<str>,
+    pub takes: usize,
+    /// The least over its takes of each one's score, left out, against the others.
+    pub agree: f32,
+    /// The take that scored it: the least typical.
+    pub least_typical: PathBuf,
+}
+
+impl std::fmt::Display for TakesSpread {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "pattern '{}': its {} takes agree at {:.2}, the least typical '{}'; tracking learns only from sounds as near them",
+            self.pattern,
+            self.takes,
+            self.agree,
+            self.least_typical.display()
+        )
+    }
+}
+
+/// With the spectral method, how near one another the takes of each impulse pattern of
+/// `patterns` with several takes lie; none with the waveform method.
+pub fn takes_spread(
+    patterns: &[Pattern],
+    settings: &DetectorSettings,
+) -> Result<Vec<TakesSpread>, crate::detect::DetectError> {
+    if settings.method != Method::Spectral || patterns.iter().all(|p| p.takes.len() < 2) {
+        return Ok(Vec::new());
+    }
+    // As for the look-alike pairs, the background recordings play no part.
+    let takes_only = DetectorSettings {
+        background: Vec::new(),
+        ..settings.clone()
+    };
+    let detector = crate::Detector::new(patterns.to_vec(), &takes_only, settings.sample_rate)?;
+    Ok(detector
+        .takes_agreement()
+        .into_iter()
+        .zip(patterns)
+        .filter_map(|(agree, p)| {
+            let agree = agree?;
+            Some(TakesSpread {
+                pattern: p.name.clone(),
+                takes: p.takes.len(),
+                agree: agree.score,
+                least_typical: p.takes.get(agree.least_typical)?.source.clone(),
+            })
+        })
+        .collect())
+}
+
 /// With the spectral method, the pairs of `patterns` whose takes look alike over the
 /// decision window (most alike first), which the method may take for each other.
 /// `check` and `record` warn of them; none with the waveform method.

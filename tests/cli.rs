@@ -783,6 +783,65 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
     );
 }
 
+#[test]
+fn check_says_how_near_one_another_a_patterns_takes_lie() {
+    let tick = "examples/patterns/tick.wav";
+    let boom = "examples/patterns/boom.wav";
+    let pop = "examples/patterns/pop.wav";
+    // Two takes that are one sound agree fully; a third that is another lies apart.
+    let out = onomato(&[
+        "check",
+        "-p",
+        &format!("x={tick}"),
+        "-p",
+        &format!("x={tick}"),
+        "-p",
+        &format!("y={boom}"),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stderr(&out);
+    assert!(
+        text.contains(&format!(
+            "pattern 'x': its 2 takes agree at 1.00, the least typical '{tick}'"
+        )),
+        "{text}"
+    );
+    // One take shows no spread.
+    assert!(!text.contains("pattern 'y': its"), "{text}");
+    let out = onomato(&[
+        "check",
+        "-p",
+        &format!("x={tick}"),
+        "-p",
+        &format!("x={tick}"),
+        "-p",
+        &format!("x={pop}"),
+    ]);
+    let text = stderr(&out);
+    let agree: f32 = text
+        .split("its 3 takes agree at ")
+        .nth(1)
+        .and_then(|rest| rest.get(..4))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(agree < 0.9, "{text}");
+    assert!(
+        text.contains(&format!("the least typical '{pop}'")),
+        "{text}"
+    );
+    // The waveform method has no tracking: nothing said.
+    let out = onomato(&[
+        "check",
+        "--method",
+        "waveform",
+        "-p",
+        &format!("x={tick}"),
+        "-p",
+        &format!("x={pop}"),
+    ]);
+    assert!(!stderr(&out).contains("takes agree"), "{}", stderr(&out));
+}
+
 /// The example beat heard through a 16 kHz source resampled back to its own rate on its
 /// way in, its takes as recorded: `analyze -v` says how far up the recording carries
 /// sound, and finds what it finds in the full-band beat.

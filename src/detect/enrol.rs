@@ -82,16 +82,39 @@ impl Template {
 /// (`docs/classify.md`, "Several takes enrolling").
 const TAKE_SHRINK: f32 = 2.0;
 
+/// How near an impulse pattern's takes lie to one another ([`takes_agreement`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TakesAgree {
+    /// The least over the takes of each one's score, left out, against the others;
+    /// minus infinity for a held pattern or one take.
+    pub score: f32,
+    /// Which of the pattern's takes (counted from 0) scored it: the least typical.
+    pub least_typical: usize,
+}
+
+impl TakesAgree {
+    /// A pattern whose takes show no spread.
+    pub const NONE: Self = Self {
+        score: f32::NEG_INFINITY,
+        least_typical: 0,
+    };
+}
+
 /// How near each impulse pattern's takes lie to one another, scored as an instance is:
 /// each take, left out, against the pattern's other takes drawn `TAKE_SHRINK` times
-/// their own mean towards it, the best of them; the least over the takes. Several takes
-/// show how far their user's sound varies, and an instance further from them than
-/// that is not clearly it ([`super::classify::Tracked`]). Minus infinity for a held
-/// pattern and for an impulse pattern of one take, whose spread no enrolment shows.
-/// Called on the takes' features before [`shrink_takes_towards_their_mean`];
-/// allocates nothing (the bands compared can change while a stream runs).
-pub(super) fn takes_agreement(templates: &[Template], kinds: &[PatternKind], out: &mut [f32]) {
-    out.fill(f32::NEG_INFINITY);
+/// their own mean towards it, the best of them; the least over the takes, and which
+/// take that was. Several takes show how far their user's sound varies, and an
+/// instance further from them than that is not clearly it
+/// ([`super::classify::Tracked`]). [`TakesAgree::NONE`] for a held pattern and for an
+/// impulse pattern of one take, whose spread no enrolment shows. Called on the takes'
+/// features before [`shrink_takes_towards_their_mean`]; allocates nothing (the bands
+/// compared can change while a stream runs).
+pub(super) fn takes_agreement(
+    templates: &[Template],
+    kinds: &[PatternKind],
+    out: &mut [TakesAgree],
+) {
+    out.fill(TakesAgree::NONE);
     let mut others_mean = [0.0f32; FEATURES];
     let mut drawn = [0.0f32; FEATURES];
     for (pi, kind) in kinds.iter().enumerate() {
@@ -104,8 +127,7 @@ pub(super) fn takes_agreement(templates: &[Template], kinds: &[PatternKind], out
                 .enumerate()
                 .filter(move |(_, t)| t.pattern == pi && !t.second_placement)
         };
-        let mut least = f32::INFINITY;
-        for (left_out, take) in takes() {
+        for (k, (left_out, take)) in takes().enumerate() {
             let others = || takes().filter(move |&(j, _)| j != left_out);
             if others().next().is_none() {
                 break;
@@ -125,10 +147,12 @@ pub(super) fn takes_agreement(templates: &[Template], kinds: &[PatternKind], out
                 scale_to_unit(&mut drawn);
                 best = best.max(similarity(&drawn, &take.features));
             }
-            least = least.min(best);
-        }
-        if least.is_finite() {
-            out[pi] = least;
+            if k == 0 || best < out[pi].score {
+                out[pi] = TakesAgree {
+                    score: best,
+                    least_typical: k,
+                };
+            }
         }
     }
 }
@@ -761,18 +785,19 @@ mod tests {
             second_placement: true,
             ..take_of(1, &[0.0, 1.0])
         });
-        let mut agree = [0.0; 4];
+        let mut agree = [TakesAgree::NONE; 4];
         takes_agreement(&templates, &kinds, &mut agree);
-        assert!((agree[0] - 0.6).abs() < 1e-6, "{agree:?}");
-        assert_eq!(agree[1], f32::NEG_INFINITY);
-        assert_eq!(agree[3], f32::NEG_INFINITY);
+        assert!((agree[0].score - 0.6).abs() < 1e-6, "{agree:?}");
+        assert_eq!(agree[1], TakesAgree::NONE);
+        assert_eq!(agree[3], TakesAgree::NONE);
         // The take apart, left out, meets the mean of the two alike: drawn towards
-        // that mean, each is that mean, at right angles to it.
-        assert!(agree[2].abs() < 1e-6, "{agree:?}");
+        // that mean, each is that mean, at right angles to it. It is the least typical.
+        assert!(agree[2].score.abs() < 1e-6, "{agree:?}");
+        assert_eq!(agree[2].least_typical, 2);
         // Each of the two alike, left out, finds the other as it is.
         templates.truncate(5);
         takes_agreement(&templates, &kinds[..3], &mut agree[..3]);
-        assert!((agree[2] - 1.0).abs() < 1e-6, "{agree:?}");
+        assert!((agree[2].score - 1.0).abs() < 1e-6, "{agree:?}");
     }
 
     #[test]

@@ -35,6 +35,7 @@ use crate::audio::{resample_clip, AudioError, ChannelSelect, StreamResampler, Wa
 use crate::config::{DetectorSettings, Method, PatternKind};
 use crate::pattern::Pattern;
 use background::BackgroundModel;
+pub use enrol::TakesAgree;
 pub use explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 pub use gates::Outcome;
 pub use held::HeldEnd;
@@ -309,6 +310,16 @@ impl Detector {
     /// method only when they end, so its begin and end come together.)
     pub fn report_begins(&mut self, report: bool) {
         self.report_begins = report;
+    }
+
+    /// Spectral method: how near each pattern's takes lie to one another, by pattern
+    /// (`None` for a held pattern and one of a single take); empty for the waveform
+    /// method.
+    pub fn takes_agreement(&self) -> Vec<Option<TakesAgree>> {
+        match &self.matcher {
+            Matcher::Waveform(_) => Vec::new(),
+            Matcher::Spectral(m) => m.takes_agreement(),
+        }
     }
 
     /// Spectral method: pairs of patterns whose takes look alike over the decision

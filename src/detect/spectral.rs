@@ -81,8 +81,8 @@ use super::context::{Before, Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
 use super::enrol::{
     first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
-    takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, Template,
-    SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+    takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, TakesAgree,
+    Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 use super::features::{
@@ -411,7 +411,7 @@ pub struct SpectralMatcher {
     tracked: Tracked,
     /// How near each pattern's takes lie to one another ([`takes_agreement`]), which
     /// an instance must reach to teach tracking.
-    takes_agree: Vec<f32>,
+    takes_agree: Vec<TakesAgree>,
     /// Per pattern, the scores of the onset being classified.
     pattern_scores: Vec<PatternScore>,
     /// The instance's features at the shift that scored best.
@@ -719,7 +719,7 @@ impl SpectralMatcher {
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
             tracked: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
-            takes_agree: vec![f32::NEG_INFINITY; n_patterns],
+            takes_agree: vec![TakesAgree::NONE; n_patterns],
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
             explain: None,
@@ -834,6 +834,15 @@ impl SpectralMatcher {
     /// less than every band (`features::Analyzer::compare_under`); `None` when every band is.
     pub fn compared_top_hz(&self) -> Option<f64> {
         self.analyzer.cepstrum.top_hz(self.rate)
+    }
+
+    /// How near each pattern's takes lie to one another, by pattern
+    /// ([`takes_agreement`]): `None` for a held pattern and one of a single take.
+    pub fn takes_agreement(&self) -> Vec<Option<TakesAgree>> {
+        self.takes_agree
+            .iter()
+            .map(|a| a.score.is_finite().then_some(*a))
+            .collect()
     }
 
     /// Pairs of patterns whose takes resemble each other over the decision window at
@@ -1865,7 +1874,7 @@ impl SpectralMatcher {
             take_score: self.pattern_scores[pi].take_score,
             other,
             threshold: self.patterns[pi].threshold,
-            takes_agree: self.takes_agree[pi],
+            takes_agree: self.takes_agree[pi].score,
             over_fired_impulse,
             amid_talk,
         };
