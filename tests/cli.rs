@@ -788,18 +788,18 @@ fn check_says_how_near_one_another_a_patterns_takes_lie() {
     let tick = "examples/patterns/tick.wav";
     let boom = "examples/patterns/boom.wav";
     let pop = "examples/patterns/pop.wav";
-    // Two takes that are one sound agree fully; a third that is another lies apart.
-    let out = onomato(&[
-        "check",
-        "-p",
-        &format!("x={tick}"),
-        "-p",
-        &format!("x={tick}"),
-        "-p",
-        &format!("y={boom}"),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let text = stderr(&out);
+    // `check` with each (name, take) as a --pattern argument, its stderr.
+    let check = |patterns: &[(&str, &str)], method: &str| {
+        let mut args = vec!["check".to_string(), "--method".into(), method.into()];
+        for (name, take) in patterns {
+            args.extend(["-p".to_string(), format!("{name}={take}")]);
+        }
+        let out = onomato(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(out.status.success(), "{}", stderr(&out));
+        stderr(&out)
+    };
+    // Two takes that are one sound agree fully.
+    let text = check(&[("x", tick), ("x", tick), ("y", boom)], "spectral");
     assert!(
         text.contains(&format!(
             "pattern 'x': its 2 takes agree at 1.00, the least typical '{tick}'"
@@ -808,16 +808,9 @@ fn check_says_how_near_one_another_a_patterns_takes_lie() {
     );
     // One take shows no spread.
     assert!(!text.contains("pattern 'y': its"), "{text}");
-    let out = onomato(&[
-        "check",
-        "-p",
-        &format!("x={tick}"),
-        "-p",
-        &format!("x={tick}"),
-        "-p",
-        &format!("x={pop}"),
-    ]);
-    let text = stderr(&out);
+    // A third take that is another sound lies apart.
+    let three = [("x", tick), ("x", tick), ("x", pop)];
+    let text = check(&three, "spectral");
     let agree: f32 = text
         .split("its 3 takes agree at ")
         .nth(1)
@@ -830,16 +823,8 @@ fn check_says_how_near_one_another_a_patterns_takes_lie() {
         "{text}"
     );
     // The waveform method has no tracking: nothing said.
-    let out = onomato(&[
-        "check",
-        "--method",
-        "waveform",
-        "-p",
-        &format!("x={tick}"),
-        "-p",
-        &format!("x={pop}"),
-    ]);
-    assert!(!stderr(&out).contains("takes agree"), "{}", stderr(&out));
+    let text = check(&three, "waveform");
+    assert!(!text.contains("takes agree"), "{text}");
 }
 
 /// The example beat heard through a 16 kHz source resampled back to its own rate on its
