@@ -532,7 +532,8 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
                 p.threshold
             );
         }
-        for spread in pattern::takes_spread(&patterns, &lane.detector)? {
+        let report = pattern::takes_report(&patterns, &lane.detector)?;
+        for spread in &report.spread {
             let _ = writeln!(err, "{who}{spread}");
         }
         for (path, model) in crate::detect::own_background(&lane.detector)? {
@@ -550,7 +551,7 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
                 top_hz / 1000.0
             );
         }
-        for warning in pattern::look_alike_patterns(patterns, &lane.detector)? {
+        for warning in &report.look_alike {
             let _ = writeln!(err, "warning: {who}{warning}");
         }
     }

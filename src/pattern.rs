@@ -323,22 +323,45 @@ impl std::fmt::Display for TakesSpread {
     }
 }
 
-/// With the spectral method, how near one another the takes of each impulse pattern of
-/// `patterns` with several takes lie; none with the waveform method.
-pub fn takes_spread(
+/// What the spectral method makes of `patterns`' takes, for `check` and `record`.
+#[derive(Debug, Default)]
+pub struct TakesReport {
+    /// The pairs of patterns whose takes look alike over the decision window (most
+    /// alike first), which the method may take for each other.
+    pub look_alike: Vec<LookAlike>,
+    /// How near one another the takes of each impulse pattern with several lie.
+    pub spread: Vec<TakesSpread>,
+}
+
+/// With the spectral method, what it makes of `patterns`' takes ([`TakesReport`]), from
+/// one detector built on them; nothing with the waveform method.
+pub fn takes_report(
     patterns: &[Pattern],
     settings: &DetectorSettings,
-) -> Result<Vec<TakesSpread>, crate::detect::DetectError> {
-    if settings.method != Method::Spectral || patterns.iter().all(|p| p.takes.len() < 2) {
-        return Ok(Vec::new());
+) -> Result<TakesReport, crate::detect::DetectError> {
+    let several_takes = patterns.iter().any(|p| p.takes.len() > 1);
+    if settings.method != Method::Spectral || (patterns.len() < 2 && !several_takes) {
+        return Ok(TakesReport::default());
     }
-    // As for the look-alike pairs, the background recordings play no part.
+    // How alike the takes are does not depend on the background recordings: they are
+    // not read and pooled again here.
     let takes_only = DetectorSettings {
         background: Vec::new(),
         ..settings.clone()
     };
     let detector = crate::Detector::new(patterns.to_vec(), &takes_only, settings.sample_rate)?;
-    Ok(detector
+    let look_alike = detector
+        .look_alike_patterns(LOOK_ALIKE_SIMILARITY)
+        .into_iter()
+        .map(|pair| LookAlike {
+            first: pair.first,
+            second: pair.second,
+            similarity: pair.similarity,
+            window_seconds: settings.decision_seconds,
+            decided_after_seconds: pair.decided_after_seconds,
+        })
+        .collect();
+    let spread = detector
         .takes_agreement()
         .into_iter()
         .zip(patterns)
@@ -351,35 +374,6 @@ pub fn takes_spread(
                 least_typical: p.takes.get(agree.least_typical)?.source.clone(),
             })
         })
-        .collect())
-}
-
-/// With the spectral method, the pairs of `patterns` whose takes look alike over the
-/// decision window (most alike first), which the method may take for each other.
-/// `check` and `record` warn of them; none with the waveform method.
-pub fn look_alike_patterns(
-    patterns: Vec<Pattern>,
-    settings: &DetectorSettings,
-) -> Result<Vec<LookAlike>, crate::detect::DetectError> {
-    if settings.method != Method::Spectral || patterns.len() < 2 {
-        return Ok(Vec::new());
-    }
-    // How alike the takes are does not depend on the background recordings: they are
-    // not read and pooled again here.
-    let takes_only = DetectorSettings {
-        background: Vec::new(),
-        ..settings.clone()
-    };
-    let detector = crate::Detector::new(patterns, &takes_only, settings.sample_rate)?;
-    Ok(detector
-        .look_alike_patterns(LOOK_ALIKE_SIMILARITY)
-        .into_iter()
-        .map(|pair| LookAlike {
-            first: pair.first,
-            second: pair.second,
-            similarity: pair.similarity,
-            window_seconds: settings.decision_seconds,
-            decided_after_seconds: pair.decided_after_seconds,
-        })
-        .collect())
+        .collect();
+    Ok(TakesReport { look_alike, spread })
 }

@@ -387,8 +387,7 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
                 .select_performer(options.performer.as_deref())
                 .map_err(|m| anyhow::anyhow!("config '{}': {m}", path.display()))?;
             let patterns = crate::pattern::load_patterns(&config.patterns, &config.detector)?;
-            let spread = crate::pattern::takes_spread(&patterns, &config.detector)?;
-            let look_alike = crate::pattern::look_alike_patterns(patterns, &config.detector)?;
+            let report = crate::pattern::takes_report(&patterns, &config.detector)?;
             let temp = path.with_extension("toml.new");
             std::fs::write(&temp, updated)
                 .with_context(|| format!("cannot write '{}'", temp.display()))?;
@@ -400,10 +399,14 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
                 options.name,
                 path.display()
             );
-            for spread in spread.iter().filter(|s| *s.pattern == *options.name) {
+            for spread in report.spread.iter().filter(|s| *s.pattern == *options.name) {
                 let _ = writeln!(err, "{spread}");
             }
-            for pair in look_alike.iter().filter(|l| l.involves(&options.name)) {
+            for pair in report
+                .look_alike
+                .iter()
+                .filter(|l| l.involves(&options.name))
+            {
                 let _ = writeln!(err, "warning: {pair}");
             }
         }

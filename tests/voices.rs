@@ -877,7 +877,9 @@ fn pop_and_pew_whose_p_lasts_as_long_as_the_wait_are_told_apart() {
     let dir = temp_dir("pop-pew-slow");
     let settings = spectral();
     let patterns = impulses(enrolled_words_at(&dir, &settings, "130"));
-    let pairs = onomato::pattern::look_alike_patterns(patterns.clone(), &settings).unwrap();
+    let pairs = onomato::pattern::takes_report(&patterns, &settings)
+        .unwrap()
+        .look_alike;
     let pair = pairs
         .iter()
         .find(|p| p.involves("pop") && p.involves("pew"))
@@ -916,7 +918,9 @@ fn pop_and_pew_which_share_their_first_25_ms_are_told_apart() {
     let settings = spectral();
     let patterns = impulses(enrolled_words(&dir, &settings));
     // `check` says so, and how long a decision between them waits.
-    let pairs = onomato::pattern::look_alike_patterns(patterns.clone(), &settings).unwrap();
+    let pairs = onomato::pattern::takes_report(&patterns, &settings)
+        .unwrap()
+        .look_alike;
     let pair = pairs
         .iter()
         .find(|p| p.involves("pop") && p.involves("pew"))
