@@ -23,8 +23,8 @@ pub(super) struct Template {
     /// placed twice gives two templates of one take.
     pub(super) take: usize,
     /// Enrolled from a second placement of a take's onset (a quiet room's, or a held
-    /// sound's soft start): left out of `shrink_takes_towards_their_mean`, which is
-    /// for different takes.
+    /// sound's soft start): left out of what compares different takes
+    /// ([`Template::is_take_of`]).
     pub(super) second_placement: bool,
     /// Centred, unit-norm features of the first frames after the take's onset.
     pub(super) features: Vec<f32>,
@@ -53,6 +53,13 @@ pub(super) struct Template {
 }
 
 impl Template {
+    /// Whether this is one of `pattern`'s takes as placed once (its second placement
+    /// is the same take again): what `shrink_takes_towards_their_mean` and
+    /// `takes_agreement` compare.
+    pub(super) fn is_take_of(&self, pattern: usize) -> bool {
+        self.pattern == pattern && !self.second_placement
+    }
+
     /// The pooled power spectrum of the take's decision window that starts `frames`
     /// frames after its onset: `pooled_power` at 0, one of `later_power` after; none
     /// past the take's end.
@@ -125,7 +132,7 @@ pub(super) fn takes_agreement(
             templates
                 .iter()
                 .enumerate()
-                .filter(move |(_, t)| t.pattern == pi && !t.second_placement)
+                .filter(move |(_, t)| t.is_take_of(pi))
         };
         for (k, (left_out, take)) in takes().enumerate() {
             let others = || takes().filter(move |&(j, _)| j != left_out);
@@ -167,15 +174,14 @@ pub(super) fn shrink_takes_towards_their_mean(templates: &mut [Template], kinds:
             continue;
         }
         mean.fill(0.0);
-        let is_take = |t: &Template| t.pattern == pi && !t.second_placement;
-        for t in templates.iter().filter(|t| is_take(t)) {
+        for t in templates.iter().filter(|t| t.is_take_of(pi)) {
             for (m, x) in mean.iter_mut().zip(&t.features) {
                 *m += x;
             }
         }
         scale_to_unit(&mut mean);
         let drawn = mean.map(|m| TAKE_SHRINK * m);
-        for t in templates.iter_mut().filter(|t| is_take(t)) {
+        for t in templates.iter_mut().filter(|t| t.is_take_of(pi)) {
             for (x, d) in t.features.iter_mut().zip(&drawn) {
                 *x += d;
             }
