@@ -1,0 +1,141 @@
+#!/usr/bin/env bash
+# Every protocol the detector is checked on beyond the development sets, in one table:
+# the voices, takes and rooms that no setting was chosen on. Each row's sets are made
+# once under WORK_DIR (a folder that is there is used as it is), scored by
+# ../shared/devsets/run.sh, and printed as one Markdown row: the mean F1 over its
+# positive sets, the worst of them, the mean per family, and the false events a minute
+# over its speech sets.
+#
+#   bash ../shared/devsets/build.sh /tmp/devsets
+#   bash scripts/robustness.sh target/release/onomato /tmp/devsets /tmp/robustness [ROW ...]
+#
+# With ROWs (names of the first column), only those. The rows and what makes them:
+# - voices, voices-more, exact: scripts/other-voices.py (six unheard espeak-ng voices,
+#   six more, and the exact-copies protocol for their words);
+# - take2, take3: scripts/other-takes.py, the real sets enrolled from another take;
+# - takes1-2, takes1-3: scripts/more-takes.py, the real sets enrolled from their first
+#   two or three takes (scored with scripts/with-more-takes.sh), and the same folders
+#   enrolled from take 1 alone (take1-of-2, take1-of-3), on the same later takes;
+# - voice-takes, voices-takes, voices-more-takes: scripts/more-voice-takes.py, the
+#   voice protocol of the dev sets and of both unheard folders with three takes a word;
+# - every other row: scripts/room-sets.sh on the dev sets, with the arguments shown.
+# Making every row takes about half an hour on two cores, scoring them as long again.
+# Needs what build.sh, other-voices.py and room-sets.sh need (espeak-ng, sox, ffmpeg).
+set -euo pipefail
+usage="usage: robustness.sh ONOMATO_BIN SETS_DIR WORK_DIR [ROW ...]"
+bin=${1:?$usage}
+sets=${2:?$usage}
+work=${3:?$usage}
+shift 3
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+run=$here/../../shared/devsets/run.sh
+venv=${DEVSETS_VENV:-${XDG_CACHE_HOME:-$HOME/.cache}/onomato-devsets-venv}
+py=$venv/bin/python
+[[ -f $run ]] || { echo "robustness.sh: $run not found" >&2; exit 1; }
+[[ -x $py ]] || { echo "robustness.sh: no $py (make it: bash ../shared/devsets/build.sh DIR)" >&2; exit 1; }
+[[ -d $sets/D1_isolated_agh ]] || { echo "robustness.sh: $sets holds no dev sets (bash ../shared/devsets/build.sh $sets)" >&2; exit 1; }
+bin=$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")
+[[ -x $bin ]] || { echo "robustness.sh: $bin is not an executable file" >&2; exit 1; }
+mkdir -p "$work"
+
+# name|how it is made (shown in the table)|folder|scored through
+rows=(
+  "voices|other-voices.py|voices|plain"
+  "voices-more|other-voices.py --more|voices-more|plain"
+  "exact|other-voices.py --exact|exact|plain"
+  "take2|other-takes.py 1|take2|plain"
+  "take3|other-takes.py 2|take3|plain"
+  "take1-of-2|more-takes.py 2, take 1 alone|takes2|plain"
+  "takes1-2|more-takes.py 2|takes2|takes"
+  "take1-of-3|more-takes.py 3, take 1 alone|takes3|plain"
+  "takes1-3|more-takes.py 3|takes3|takes"
+  "voice-takes|more-voice-takes.py, the dev voices|voice-takes|takes"
+  "voices-takes|more-voice-takes.py, voices|voices-takes|takes"
+  "voices-more-takes|more-voice-takes.py, voices-more|voices-more-takes|takes"
+  "room-0.47s|reverb 25|room25|plain"
+  "room-1.32s|reverb 50|room50|plain"
+  "room-0.47s-dry-takes|reverb 25 100 sequences|room25s|plain"
+  "room-1.32s-dry-takes|reverb 50 100 sequences|room50s|plain"
+  "brown|noise brownnoise -30|brown|plain"
+  "pink|noise pinknoise -40|pink|plain"
+  "hum-50|hum 50 -40|hum50|plain"
+  "hum-60|hum 60 -40|hum60|plain"
+  "gate|gate 10|gate10|plain"
+  "mp3-64|mp3 64|mp3-64|plain"
+  "mp3-32|mp3 32|mp3-32|plain"
+  "silence|silence 0.5|silence|plain"
+  "head|head 0.002|head|plain"
+  "rate-16k|rate 16000|rate16k|plain"
+  "rate-8k|rate 8000|rate8k|plain"
+  "lowpass|lowpass 6300|lowpass|plain"
+  "lowpass-seq|lowpass 6300 sequences|lowpass-seq|plain"
+)
+
+make_folder() {  # name how folder
+  local name=$1 how=$2 out=$work/$3
+  [[ -d $out ]] && return 0
+  echo "robustness.sh: making $out ($how)" >&2
+  case $name in
+    voices) "$py" "$here/other-voices.py" "$out" ;;
+    voices-more) "$py" "$here/other-voices.py" --more "$out" ;;
+    exact) "$py" "$here/other-voices.py" --exact "$out" ;;
+    take2) "$py" "$here/other-takes.py" 1 "$out" ;;
+    take3) "$py" "$here/other-takes.py" 2 "$out" ;;
+    take1-of-2 | takes1-2) "$py" "$here/more-takes.py" 2 "$out" ;;
+    take1-of-3 | takes1-3) "$py" "$here/more-takes.py" 3 "$out" ;;
+    voice-takes) "$py" "$here/more-voice-takes.py" "$sets" "$out" ;;
+    voices-takes)
+      make_folder voices other-voices.py voices
+      "$py" "$here/more-voice-takes.py" "$work/voices" "$out"
+      ;;
+    voices-more-takes)
+      make_folder voices-more "other-voices.py --more" voices-more
+      "$py" "$here/more-voice-takes.py" "$work/voices-more" "$out"
+      ;;
+    *)
+      # shellcheck disable=SC2086  # the room's arguments, word by word
+      bash "$here/room-sets.sh" "$sets" "$out" $how >/dev/null
+      ;;
+  esac >&2
+}
+
+row() {  # name how folder scoring
+  local name=$1 how=$2 folder=$work/$3 scoring=$4 summary=$work/$1.summary.json
+  make_folder "$name" "$how" "$3"
+  local binary=$bin
+  if [[ $scoring == takes ]]; then
+    binary=$here/with-more-takes.sh
+    export ONOMATO=$bin
+  fi
+  TAG=robustness SUMMARY=$summary bash "$run" "$binary" "$folder" >/dev/null
+  python3 - "$name" "$how" "$summary" <<'EOF'
+import json, sys
+name, how, path = sys.argv[1:]
+s = json.load(open(path))
+positive = {k: v for k, v in s["sets"].items() if v.get("f1") is not None}
+worst = min(positive.items(), key=lambda kv: kv[1]["f1"]) if positive else None
+families = " / ".join(f"{f} {v:.3f}" for f, v in s["mean_f1_by_family"].items())
+f1 = s["mean_f1_positive"]
+speech = s.get("false_per_min_negative")
+print(f"| {name} | {how} | {f1:.3f} | " + (f"{worst[1]['f1']:.3f} ({worst[0]})" if worst else "-")
+      + f" | {families} | " + (f"{speech:.2f}" if s.get("negative_sets") else "-") + " |")
+EOF
+}
+
+wanted=("$@")
+for w in "${wanted[@]}"; do
+  known=0
+  for r in "${rows[@]}"; do [[ ${r%%|*} == "$w" ]] && known=1; done
+  [[ $known == 1 ]] || { echo "robustness.sh: no row '$w'; the rows: $(printf '%s ' "${rows[@]%%|*}")" >&2; exit 2; }
+done
+echo "| row | made by | mean F1 | worst set | per family | speech, false events a minute |"
+echo "|---|---|---|---|---|---|"
+for r in "${rows[@]}"; do
+  IFS='|' read -r name how folder scoring <<<"$r"
+  if [[ ${#wanted[@]} -gt 0 ]]; then
+    keep=0
+    for w in "${wanted[@]}"; do [[ $w == "$name" ]] && keep=1; done
+    [[ $keep == 1 ]] || continue
+  fi
+  row "$name" "$how" "$folder" "$scoring"
+done
