@@ -16,8 +16,11 @@ pub const SILENT_PEAK_DBFS: f64 = -60.0;
 const NOTHING_PEAK_DBFS: f64 = -80.0;
 /// Leading and trailing samples quieter than this, relative to the take's peak, are cut.
 pub const TRIM_BELOW_PEAK_DB: f64 = -50.0;
-/// A take shorter than this after trimming is refused.
-pub const MIN_TAKE_SECONDS: f64 = 0.01;
+/// A take shorter than this after trimming is refused: a spike of a few samples (a
+/// glitch of the interface) rather than a sound. The shortest sounds a mouth makes,
+/// tongue and lip clicks, last a few milliseconds, and a click of 4 ms is a take like
+/// any other (`tests/spectral.rs`, `a_click_of_4_ms_enrols_and_each_one_is_found`).
+pub const MIN_TAKE_SECONDS: f64 = 0.002;
 
 #[derive(Debug, thiserror::Error)]
 pub enum PatternError {

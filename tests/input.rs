@@ -260,12 +260,12 @@ fn bad_pattern_files_are_refused_with_the_file_and_the_reason() {
         "{msg}"
     );
 
-    let mut click = vec![0.0f32; 2000];
-    click[1000..1060].copy_from_slice(&noise_burst(RATE, 0.0028, 1.0, 6)[..60]);
-    write_wav_f32(&dir.join("click.wav"), &click, RATE);
-    let msg = load_error(&dir, "click.wav", &settings);
+    let mut spike = vec![0.0f32; 2000];
+    spike[1000..1020].copy_from_slice(&noise_burst(RATE, 0.001, 1.0, 6)[..20]);
+    write_wav_f32(&dir.join("spike.wav"), &spike, RATE);
+    let msg = load_error(&dir, "spike.wav", &settings);
     assert!(
-        msg.contains("after trimming silence") && msg.contains("at least 10 ms"),
+        msg.contains("after trimming silence") && msg.contains("at least 2 ms"),
         "{msg}"
     );
 }

@@ -907,6 +907,56 @@ fn hits_30_ms_apart_in_noise_40_db_down_are_each_found() {
     }
 }
 
+/// The shortest sounds a mouth makes, tongue and lip clicks, last a few milliseconds. A
+/// click that dies 50 dB away within 4.6 ms, with nothing after it (a quiet room, a
+/// close microphone), was once refused as a take (under 10 ms once trimmed); it is a
+/// take like any other, and each click of a sequence of clicks and "pop"s, 0-9 dB under
+/// the takes in noise 60 dB down, is found and named.
+#[test]
+fn a_click_of_4_ms_enrols_and_each_one_is_found() {
+    let settings = spectral();
+    let click = noise_burst(RATE, 0.006, 0.0008, 31);
+    let pop = sweep(RATE, 0.12, 400.0, 150.0, 0.03);
+    let patterns = vec![
+        Pattern::from_samples(
+            "click",
+            PatternKind::Impulse,
+            vec![click.clone()],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("pop", PatternKind::Impulse, vec![pop.clone()], &settings).unwrap(),
+    ];
+    let mut rng = Rng::new(32);
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    for _ in 0..40 {
+        let (label, sound) = if rng.unit() < 0.5 {
+            ("click", &click)
+        } else {
+            ("pop", &pop)
+        };
+        let gain = 10f64.powf(rng.range(-9.0, 0.0) / 20.0) as f32;
+        truth.push(Annotation {
+            onset: rec.len() as f64 / f64::from(RATE),
+            label: label.into(),
+            end: None,
+        });
+        rec.extend(sound.iter().map(|v| v * gain));
+        rec.extend(std::iter::repeat_n(0.0, samples_for(rng.range(0.15, 0.6), RATE)));
+    }
+    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 33);
+    let clicks = truth.iter().filter(|t| t.label == "click").count();
+    assert!(clicks >= 10, "{clicks} clicks");
+    let (events, outcomes) = detect_explained(patterns, &settings, &rec);
+    let s = score(&events, &truth, 0.05);
+    assert!(
+        s.overall.f1 >= 0.99,
+        "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}
+
 /// Brown noise (white noise through a leaky integrator) of RMS `rms`, added to `rec`:
 /// rumble whose power lies mostly far under the 80 Hz the bands start at, and wanders.
 fn add_rumble(rec: &mut [f32], rms: f64, seed: u64) {
