@@ -943,7 +943,10 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
             end: None,
         });
         rec.extend(sound.iter().map(|v| v * gain));
-        rec.extend(std::iter::repeat_n(0.0, samples_for(rng.range(0.15, 0.6), RATE)));
+        rec.extend(std::iter::repeat_n(
+            0.0,
+            samples_for(rng.range(0.15, 0.6), RATE),
+        ));
     }
     add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 33);
     let clicks = truth.iter().filter(|t| t.label == "click").count();
@@ -953,6 +956,64 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
     assert!(
         s.overall.f1 >= 0.99,
         "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}
+
+/// A sound of several attacks (a teeth chatter, a tongue trill) is said with more of
+/// them than its take has. Its take here is four clicks 67 ms apart; each instance has
+/// six to nine, at 14-16 a second, so its later clicks come after its take's end. They
+/// continue it while they keep coming at its take's pace: one event an instance, and
+/// the "pop"s between them found as well.
+#[test]
+fn a_chatter_longer_than_its_take_is_one_event() {
+    let settings = spectral();
+    let click = noise_burst(RATE, 0.006, 0.0008, 41);
+    let chatter = |clicks: usize, per_second: f64| {
+        let period = samples_for(1.0 / per_second, RATE);
+        let mut x = vec![0.0f32; period * (clicks - 1) + click.len()];
+        for k in 0..clicks {
+            place(&mut x, &click, k * period, 1.0);
+        }
+        x
+    };
+    let take = chatter(4, 15.0);
+    let pop = sweep(RATE, 0.12, 400.0, 150.0, 0.03);
+    let patterns = vec![
+        Pattern::from_samples("chatter", PatternKind::Impulse, vec![take], &settings).unwrap(),
+        Pattern::from_samples("pop", PatternKind::Impulse, vec![pop.clone()], &settings).unwrap(),
+    ];
+    let mut rng = Rng::new(42);
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    for _ in 0..30 {
+        let (label, sound) = if rng.unit() < 0.5 {
+            let clicks = 6 + (rng.unit() * 4.0) as usize;
+            ("chatter", chatter(clicks, rng.range(14.0, 16.0)))
+        } else {
+            ("pop", pop.clone())
+        };
+        let gain = 10f64.powf(rng.range(-6.0, 0.0) / 20.0) as f32;
+        truth.push(Annotation {
+            onset: rec.len() as f64 / f64::from(RATE),
+            label: label.into(),
+            end: None,
+        });
+        rec.extend(sound.iter().map(|v| v * gain));
+        rec.extend(std::iter::repeat_n(
+            0.0,
+            samples_for(rng.range(0.3, 0.6), RATE),
+        ));
+    }
+    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 43);
+    let chatters = truth.iter().filter(|t| t.label == "chatter").count();
+    assert!(chatters >= 8, "{chatters} chatters");
+    let (events, outcomes) = detect_explained(patterns, &settings, &rec);
+    let fired = events.iter().filter(|e| &*e.pattern == "chatter").count();
+    let s = score(&events, &truth, 0.05);
+    assert!(
+        fired == chatters && s.overall.f1 >= 0.99,
+        "{fired} chatter events for {chatters}; {}; onsets considered: {outcomes:?}",
         onomato::eval::render_text(&s)
     );
 }

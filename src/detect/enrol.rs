@@ -50,6 +50,10 @@ pub(super) struct Template {
     /// (`[k - 1]`: k frames after it) to the end of the take.
     pub(super) later_power: Vec<f32>,
     pub(super) later_energy: Vec<f64>,
+    /// For a take that is one sound repeated (at least `REPEATED_ATTACKS` attacks after
+    /// this placement, each as alike its first window as a continuation must be), the
+    /// longest time between two of them, frames; none for any other take.
+    pub(super) repeats_every: Option<usize>,
 }
 
 impl Template {
@@ -394,7 +398,7 @@ pub(super) struct TakeFeatures {
     pub(super) later_energy: Vec<f64>,
 }
 
-/// Features of one take from its onset (`onset_in_take`, from [`take_onsets`]): runs
+/// Features of one take from its onset (`onset_in_take`, from [`take_placements`]): runs
 /// the same analysis over the take (after a little silence) as over a stream.
 pub(super) fn take_features(
     analyzer: &mut Analyzer,
@@ -493,9 +497,31 @@ pub(super) fn takes_carry_under_hz<'a>(
     passband.top_hz()
 }
 
+/// An onset within a take is another attack of it when its sound rises this far (dB)
+/// out of the take's sound over this span before it (from, to; seconds before the
+/// onset): the rise the quiet-before gate asks of a stream's new sound
+/// (`GateParams::pre_quiet_db`, `PRE_QUIET_FROM_SECONDS` and `PRE_QUIET_TO_SECONDS`).
+const ATTACK_RISE_DB: f32 = 10.0;
+const ATTACK_BEFORE_SECONDS: (f64, f64) = (0.040, 0.005);
+
 /// Enrolment's quiet room lies this far (dB) under a take's quietest 5 ms, so that
-/// every part of the take stands out of its noise (`take_onsets`).
+/// every part of the take stands out of its noise (`take_placements`).
 const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
+
+/// Where a stream places a take's onset, and the attacks a quiet room finds in it
+/// ([`take_placements`]).
+pub(super) struct TakePlacements {
+    /// The take's onset...
+    pub first: usize,
+    /// ...and where a quiet room places it, when that differs.
+    pub quiet_room: Option<usize>,
+    /// The attacks that the quiet room finds in the take, samples from its start, in
+    /// order: where it places the take's onset, then each later onset on sound within
+    /// `TAKE_ONSET_RANGE_DB` of its loudest that rises `ATTACK_RISE_DB` out of the take
+    /// before it. A sound made of one sound repeated (a teeth chatter, a tongue trill,
+    /// a snare roll) has several.
+    pub attacks: Vec<usize>,
+}
 
 /// Where a stream places a take's onset, in samples: the take is run through the
 /// stream's own stages (onset detection and placement) after [`probe_lead_seconds`] of
@@ -504,19 +530,20 @@ const ONSET_ABOVE_FLOOR_DB: f32 = 15.0;
 /// dB below its vowel, found in a quiet room and lost in the noise of a loud one. So
 /// it is placed twice: in the loudest room the take allows (noise at the power of its
 /// quietest 5 ms, which is sound, as takes are cut close), and in one quiet enough for
-/// every part of the take to stand `ONSET_ABOVE_FLOOR_DB` out. Returns the first
-/// placement, and the second when it differs by more than a hop. A take the onset
+/// every part of the take to stand `ONSET_ABOVE_FLOOR_DB` out. Gives the first
+/// placement, the second when it differs by more than a hop, and the attacks that the
+/// quiet room finds in the take. A take the onset
 /// stage finds nothing in is placed on its first block within `ONSET_RANGE_DB` of its
 /// loudest. On the development sets a quiet room's placement raised the mean F1 from
 /// 0.786 to 0.804 (D4_voice_m7 0.744 to 0.887, D4_voice_rpf1 0.741 to 0.891) and let
 /// two more of those voices' words in speech pass for their patterns (rooms 5 and 10
 /// dB quieter besides changed nothing; louder ones let speech through:
 /// `docs/onset-stage.md`).
-pub(super) fn take_onsets(
+pub(super) fn take_placements(
     take: &[f32],
     settings: &DetectorSettings,
     hop: usize,
-) -> (usize, Option<usize>) {
+) -> TakePlacements {
     let fallback = first_block_within(take, hop, ONSET_RANGE_DB as f32);
     let rate = f64::from(settings.sample_rate);
     let block = ((0.005 * rate) as usize).max(1);
@@ -527,27 +554,68 @@ pub(super) fn take_onsets(
     let quietest = powers.iter().cloned().fold(f32::INFINITY, f32::min);
     let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
     if loudest.is_nan() || loudest <= 0.0 {
-        return (fallback, None);
+        return TakePlacements {
+            first: fallback,
+            quiet_room: None,
+            attacks: Vec::new(),
+        };
     }
     let loud_room = quietest.max(loudest * 1e-9);
     let quiet_room = loud_room * 10f32.powf(-ONSET_ABOVE_FLOOR_DB / 10.0);
-    let placed = |noise_power| probe_onset(take, settings, noise_power, &powers, block);
-    let first = placed(loud_room).unwrap_or(fallback);
-    let second = placed(quiet_room).filter(|&at| at.abs_diff(first) > hop);
-    (first, second)
+    let placed = |noise_power| probe_onsets(take, settings, noise_power, &powers, block);
+    let first = placed(loud_room).first().copied().unwrap_or(fallback);
+    let placed_quietly = placed(quiet_room);
+    let second = placed_quietly
+        .first()
+        .copied()
+        .filter(|&at| at.abs_diff(first) > hop);
+    // The onsets after the first that rise out of the sound before them as a new
+    // sound of a stream must (the quiet-before gate's rise, over its span).
+    let rises = |at: usize| {
+        let loudest = |from: usize, to: usize| {
+            powers[(from / block).min(powers.len() - 1)..=(to / block).min(powers.len() - 1)]
+                .iter()
+                .cloned()
+                .fold(0.0f32, f32::max)
+        };
+        let span = |seconds: f64| (seconds * rate) as usize;
+        let before = loudest(
+            at.saturating_sub(span(ATTACK_BEFORE_SECONDS.0)),
+            at.saturating_sub(span(ATTACK_BEFORE_SECONDS.1)),
+        );
+        let after = loudest(at, at + block);
+        after >= before * 10f32.powf(ATTACK_RISE_DB / 10.0)
+    };
+    let attacks: Vec<usize> = placed_quietly
+        .iter()
+        .copied()
+        .take(1)
+        .chain(
+            placed_quietly
+                .iter()
+                .copied()
+                .skip(1)
+                .filter(|&at| rises(at)),
+        )
+        .collect();
+    TakePlacements {
+        first,
+        quiet_room: second,
+        attacks,
+    }
 }
 
-/// The first onset a stream places on `take` after [`probe_lead_seconds`] of white
-/// noise of power `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's
-/// loudest; samples from the take's start. `powers` are the take's mean powers over blocks of
-/// `block` samples.
-fn probe_onset(
+/// The onsets a stream places on `take` after [`probe_lead_seconds`] of white noise of
+/// power `noise_power`, on sound within `TAKE_ONSET_RANGE_DB` of the take's loudest, in
+/// order; samples from the take's start. `powers` are the take's mean powers over
+/// blocks of `block` samples.
+fn probe_onsets(
     take: &[f32],
     settings: &DetectorSettings,
     noise_power: f32,
     powers: &[f32],
     block: usize,
-) -> Option<usize> {
+) -> Vec<usize> {
     let rate = f64::from(settings.sample_rate);
     let loudest = powers.iter().cloned().fold(0.0f32, f32::max);
     let lead = (probe_lead_seconds() * rate) as usize;
@@ -570,7 +638,8 @@ fn probe_onset(
         .map(|&at| at as usize)
         .filter(|&at| at + early_slack >= lead)
         .map(|at| at.saturating_sub(lead))
-        .find(|&at| at < take.len() && power_at(at) >= wanted)
+        .filter(|&at| at < take.len() && power_at(at) >= wanted)
+        .collect()
 }
 
 /// Where a stream places the onsets of `signal` (at `rate`), samples: the features,
@@ -701,7 +770,11 @@ mod tests {
         let rate = f64::from(s.sample_rate);
         let take = tone(rate, 150.0, 200.0, 0.5);
         let hop = Analyzer::new(rate).hop;
-        let (first, second) = take_onsets(&take, &s, hop);
+        let TakePlacements {
+            first,
+            quiet_room: second,
+            ..
+        } = take_placements(&take, &s, hop);
         assert!(first <= 2 * hop, "placed at {first}");
         assert_eq!(second, None);
     }
@@ -715,7 +788,11 @@ mod tests {
         let vowel_at = take.len();
         take.extend(tone(rate, 200.0, 250.0, 0.5));
         let hop = Analyzer::new(rate).hop;
-        let (first, second) = take_onsets(&take, &s, hop);
+        let TakePlacements {
+            first,
+            quiet_room: second,
+            ..
+        } = take_placements(&take, &s, hop);
         // As loud a room as the take allows hides the "p": placed on the vowel.
         assert!(
             first.abs_diff(vowel_at) <= 2 * hop,
@@ -724,6 +801,38 @@ mod tests {
         // A quiet room finds the "p".
         let early = second.expect("a second placement");
         assert!(early <= 2 * hop, "{early}");
+    }
+
+    #[test]
+    fn a_take_of_several_attacks_is_placed_on_each() {
+        let s = settings();
+        let rate = f64::from(s.sample_rate);
+        let hop = Analyzer::new(rate).hop;
+        // One tone: one attack, however it fades.
+        let tone_take = tone(rate, 150.0, 200.0, 0.5);
+        assert_eq!(take_placements(&tone_take, &s, hop).attacks, vec![0]);
+        // Four clicks 100, 130 and 110 ms apart (a teeth chatter): bursts of noise dying
+        // away within 4 ms.
+        let mut chatter = Vec::new();
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for gap_ms in [100.0, 130.0, 110.0, 40.0] {
+            let at = chatter.len();
+            for i in 0..(0.004 * rate) as usize {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let white = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                chatter.push((white * (-(i as f64) / (0.0008 * rate)).exp()) as f32);
+            }
+            chatter.resize(at + (gap_ms * rate / 1000.0) as usize, 0.0);
+        }
+        let attacks = take_placements(&chatter, &s, hop).attacks;
+        let ms: Vec<f64> = attacks.iter().map(|&a| a as f64 / rate * 1000.0).collect();
+        let clicks = [0.0, 100.0, 230.0, 340.0];
+        assert!(
+            ms.len() == clicks.len() && ms.iter().zip(clicks).all(|(m, c)| (m - c).abs() <= 3.0),
+            "{ms:?}"
+        );
     }
 
     /// A template of pattern `pattern` from `take`, placed at its start.
@@ -741,6 +850,7 @@ mod tests {
             after_earlier: 0,
             later_power: t.later_power,
             later_energy: t.later_energy,
+            repeats_every: None,
         }
     }
 
@@ -761,6 +871,7 @@ mod tests {
             after_earlier: 0,
             later_power: Vec::new(),
             later_energy: Vec::new(),
+            repeats_every: None,
         }
     }
 

@@ -80,9 +80,9 @@ use super::classify::{
 use super::context::{Before, Context, ContextParams, Guard, SPAN_STRETCH};
 use super::copies::Copies;
 use super::enrol::{
-    first_block_within, shrink_takes_towards_their_mean, take_features, take_onsets,
-    takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, TakesAgree,
-    Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
+    first_block_within, shrink_takes_towards_their_mean, take_features, take_placements,
+    takes_agreement, takes_carry_under_hz, window_power, Separating, TakeFeatures, TakePlacements,
+    TakesAgree, Template, SOFT_ONSET_GAP_SECONDS, SOFT_ONSET_RANGE_DB,
 };
 use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 use super::features::{
@@ -491,6 +491,10 @@ struct FiredImpulse {
     span: (u64, u64),
     onset_frame: u64,
     strength: f64,
+    /// The frame of the last onset taken for its own later sound (its own onset's until
+    /// one is): a sound of several attacks goes on past its take's end while they keep
+    /// coming at its take's pace ([`SpectralMatcher::continuation_lags`]).
+    last_attack_frame: u64,
 }
 
 /// See [`SpectralMatcher::continues_last_impulse`].
@@ -525,6 +529,50 @@ const BETWEEN_TWO_WINDOWS: usize = 2;
 
 /// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
 /// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
+/// A take whose sound is one sound repeated has at least this many attacks: the first
+/// and two more, so that it repeats at a pace (a word's first and closing consonants
+/// are two).
+const REPEATED_ATTACKS: usize = 3;
+
+/// For a take placed at sample `start` whose attacks lie at `attacks` (samples from its
+/// start, [`TakePlacements::attacks`]), with the pooled power of its first decision
+/// window and of each later frame's (`later_power`): when it has `REPEATED_ATTACKS`
+/// attacks from `start` on, each as alike its first window as a continuation must be
+/// (`CONTINUATION_SIMILARITY`), the longest time between two successive ones, frames.
+/// A sound said with more of its attacks than its take has goes on at that pace.
+fn repeats_every(
+    attacks: &[usize],
+    start: usize,
+    hop: usize,
+    pooled_power: &[f32],
+    later_power: &[f32],
+    cepstrum: &Cepstrum,
+) -> Option<usize> {
+    // Each attack that lies where the take still has a whole window, as frames after
+    // this placement.
+    let windows = later_power.len() / BANDS;
+    let lags: Vec<usize> = attacks
+        .iter()
+        .filter(|&&at| at + hop > start)
+        .map(|&at| (at.saturating_sub(start) + hop / 2) / hop)
+        .filter(|&lag| lag <= windows)
+        .collect();
+    if lags.len() < REPEATED_ATTACKS {
+        return None;
+    }
+    let mut first = [0.0f32; FEATURES];
+    features_of_power(pooled_power, cepstrum, &mut first);
+    let mut later = [0.0f32; FEATURES];
+    for &lag in &lags[1..] {
+        let power = &later_power[(lag.max(1) - 1) * BANDS..lag.max(1) * BANDS];
+        features_of_power(power, cepstrum, &mut later);
+        if similarity(&first, &later) < CONTINUATION_SIMILARITY {
+            return None;
+        }
+    }
+    lags.windows(2).map(|w| w[1] - w[0]).max()
+}
+
 fn pool_ring(frames: &[f32], capacity: usize, first: u64, count: usize, out: &mut [f32]) {
     let cap = capacity as u64;
     pool_power(
@@ -566,7 +614,11 @@ impl SpectralMatcher {
             let mut sustain_frames = 0usize;
             let mut power = 0.0f64;
             for take in &p.takes {
-                let (onset, quiet_room_onset) = take_onsets(&take.samples, settings, analyzer.hop);
+                let TakePlacements {
+                    first: onset,
+                    quiet_room: quiet_room_onset,
+                    attacks,
+                } = take_placements(&take.samples, settings, analyzer.hop);
                 if p.kind == PatternKind::Impulse {
                     // Compared from the earlier placement: a copy loud enough to be
                     // checked is placed there at the latest.
@@ -597,6 +649,18 @@ impl SpectralMatcher {
                         later_power,
                         later_energy,
                     } = take_features(&mut analyzer, &take.samples, decision_frames, start);
+                    let repeats_every = (p.kind == PatternKind::Impulse)
+                        .then(|| {
+                            repeats_every(
+                                &attacks,
+                                start,
+                                analyzer.hop,
+                                &pooled_power,
+                                &later_power,
+                                &analyzer.cepstrum,
+                            )
+                        })
+                        .flatten();
                     templates.push(Template {
                         pattern: pi,
                         take: takes_so_far,
@@ -617,6 +681,7 @@ impl SpectralMatcher {
                         },
                         later_power,
                         later_energy,
+                        repeats_every,
                     });
                     // The held spectrum is taken from the later start.
                     sustained = Some((mean_frame, mean_frames));
@@ -1290,6 +1355,11 @@ impl SpectralMatcher {
             self.record(&decision);
         }
         self.cover_stopped(&decision);
+        if outcome == Outcome::Continuation {
+            if let Some(last) = &mut self.last_impulse {
+                last.last_attack_frame = onset_frame;
+            }
+        }
         if outcome != Outcome::Fired {
             // What its first window looked like may have misled the gates; what came
             // before it is the guard's to judge, and a user who plays a take back while
@@ -1442,6 +1512,7 @@ impl SpectralMatcher {
             span: (began, time_sample + take_length),
             onset_frame,
             strength,
+            last_attack_frame: onset_frame,
         });
         let taught = (kind == PatternKind::Impulse).then(|| {
             let taught = self.track(pi, over_fired_impulse, !d.clear_of_talk);
@@ -1965,13 +2036,29 @@ impl SpectralMatcher {
     /// The last fired impulse and the frames after its take's onset (each a window of
     /// its `later_power`) that the onset at frame `onset_frame` may be the later sound
     /// of: as many as lie between the two, give or take `CONTINUATION_SLACK_SECONDS`.
-    /// None without such an impulse, or when the onset lies past its take's end.
+    /// A take that is one sound repeated (a teeth chatter, a trill: [`repeats_every`])
+    /// is said at another pace and with more of its attacks than it was enrolled with:
+    /// while they keep coming at about its pace (each no further from the last taken
+    /// for its own than its take's longest gap between attacks and
+    /// `CONTINUATION_SLACK_SECONDS`) and for as long as its sound may stretch
+    /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without such an impulse, or when the onset lies past its
+    /// take's end otherwise.
     fn continuation_lags(&self, onset_frame: u64) -> Option<(FiredImpulse, RangeInclusive<usize>)> {
         let last = self.last_impulse?;
         let after = onset_frame.saturating_sub(last.onset_frame) as usize;
         let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
-        let count = self.templates[last.template].later_energy.len();
-        (after != 0 && after <= count + slack).then(|| {
+        let template = &self.templates[last.template];
+        let count = template.later_energy.len();
+        if after == 0 || count == 0 {
+            return None;
+        }
+        if let Some(gap) = template.repeats_every {
+            let since_attack = onset_frame.saturating_sub(last.last_attack_frame) as usize;
+            if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack {
+                return Some((last, 1..=count));
+            }
+        }
+        (after <= count + slack).then(|| {
             (
                 last,
                 after.saturating_sub(slack).max(1)..=(after + slack).min(count),
