@@ -130,6 +130,10 @@ struct PatternInfo {
     sustain: Vec<f32>,
     /// Mean power per sample of the takes.
     power: f64,
+    /// The longest gap between attacks over those of its takes that are one sound
+    /// repeated ([`repeats_every`]), frames: each take is said at its own pace, and the
+    /// takes show how far the pace strays.
+    repeats_every: Option<usize>,
 }
 
 /// What an onset's first window showed ([`SpectralMatcher::first_look`]): its best
@@ -705,6 +709,11 @@ impl SpectralMatcher {
                 sustain: sustain.clone(),
                 mean_frame: sustain,
                 power: power / p.takes.len().max(1) as f64,
+                repeats_every: templates
+                    .iter()
+                    .filter(|t| t.pattern == pi)
+                    .filter_map(|t| t.repeats_every)
+                    .max(),
             });
         }
         let frame_capacity =
@@ -2039,7 +2048,7 @@ impl SpectralMatcher {
     /// A take that is one sound repeated (a teeth chatter, a trill: [`repeats_every`])
     /// is said at another pace and with more of its attacks than it was enrolled with:
     /// while they keep coming at about its pace (each no further from the last taken
-    /// for its own than its take's longest gap between attacks and
+    /// for its own than the longest gap between attacks of its pattern's takes, and
     /// `CONTINUATION_SLACK_SECONDS`) and for as long as its sound may stretch
     /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without such an impulse, or when the onset lies past its
     /// take's end otherwise.
@@ -2052,7 +2061,10 @@ impl SpectralMatcher {
         if after == 0 || count == 0 {
             return None;
         }
-        if let Some(gap) = template.repeats_every {
+        if let (Some(_), Some(gap)) = (
+            template.repeats_every,
+            self.patterns[template.pattern].repeats_every,
+        ) {
             let since_attack = onset_frame.saturating_sub(last.last_attack_frame) as usize;
             if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack {
                 return Some((last, 1..=count));
