@@ -536,6 +536,9 @@ fn run_check(source: &PatternSource) -> anyhow::Result<()> {
         for spread in &report.spread {
             let _ = writeln!(err, "{who}{spread}");
         }
+        for repeated in &report.repeated {
+            let _ = writeln!(err, "{who}{repeated}");
+        }
         for (path, model) in crate::detect::own_background(&lane.detector)? {
             let _ = writeln!(
                 err,

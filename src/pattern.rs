@@ -326,6 +326,25 @@ impl std::fmt::Display for TakesSpread {
     }
 }
 
+/// An impulse pattern whose takes are one sound repeated (`check` and `record` say so).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Repeated {
+    pub pattern: Arc<str>,
+    /// The longest gap between the takes' attacks, seconds.
+    pub every_seconds: f64,
+}
+
+impl std::fmt::Display for Repeated {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "pattern '{}': one sound repeated, its attacks at most {:.0} ms apart; an instance is one event however many it has, while they come as close",
+            self.pattern,
+            self.every_seconds * 1000.0
+        )
+    }
+}
+
 /// What the spectral method makes of `patterns`' takes, for `check` and `record`.
 #[derive(Debug, Default)]
 pub struct TakesReport {
@@ -334,6 +353,8 @@ pub struct TakesReport {
     pub look_alike: Vec<LookAlike>,
     /// How near one another the takes of each impulse pattern with several lie.
     pub spread: Vec<TakesSpread>,
+    /// The impulse patterns whose takes are one sound repeated.
+    pub repeated: Vec<Repeated>,
 }
 
 /// With the spectral method, what it makes of `patterns`' takes ([`TakesReport`]), from
@@ -342,8 +363,7 @@ pub fn takes_report(
     patterns: &[Pattern],
     settings: &DetectorSettings,
 ) -> Result<TakesReport, crate::detect::DetectError> {
-    let several_takes = patterns.iter().any(|p| p.takes.len() > 1);
-    if settings.method != Method::Spectral || (patterns.len() < 2 && !several_takes) {
+    if settings.method != Method::Spectral {
         return Ok(TakesReport::default());
     }
     // How alike the takes are does not depend on the background recordings: they are
@@ -378,5 +398,20 @@ pub fn takes_report(
             })
         })
         .collect();
-    Ok(TakesReport { look_alike, spread })
+    let repeated = detector
+        .repeats_every_seconds()
+        .into_iter()
+        .zip(patterns)
+        .filter_map(|(every, p)| {
+            Some(Repeated {
+                pattern: p.name.clone(),
+                every_seconds: every?,
+            })
+        })
+        .collect();
+    Ok(TakesReport {
+        look_alike,
+        spread,
+        repeated,
+    })
 }

@@ -402,6 +402,13 @@ pub fn record(options: &RecordOptions, err: &mut dyn Write) -> anyhow::Result<Re
             for spread in report.spread.iter().filter(|s| *s.pattern == *options.name) {
                 let _ = writeln!(err, "{spread}");
             }
+            for repeated in report
+                .repeated
+                .iter()
+                .filter(|r| *r.pattern == *options.name)
+            {
+                let _ = writeln!(err, "{repeated}");
+            }
             for pair in report
                 .look_alike
                 .iter()

@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod common;
-use common::{root, temp_dir};
+use common::{noise_burst, place, root, samples_for, temp_dir, write_wav_f32, RATE};
 
 fn onomato(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_onomato"))
@@ -781,6 +781,39 @@ fn check_warns_of_patterns_the_spectral_method_would_take_for_each_other() {
         "{}",
         stderr(&out)
     );
+}
+
+#[test]
+fn check_says_which_patterns_are_one_sound_repeated() {
+    let dir = temp_dir("check-repeated");
+    // A teeth chatter: four clicks, 15 a second.
+    let click = noise_burst(RATE, 0.006, 0.0008, 41);
+    let period = samples_for(1.0 / 15.0, RATE);
+    let mut chatter = vec![0.0f32; samples_for(0.05, RATE) + 3 * period + click.len()];
+    for k in 0..4 {
+        place(
+            &mut chatter,
+            &click,
+            samples_for(0.05, RATE) + k * period,
+            1.0,
+        );
+    }
+    let take = dir.join("chatter.wav");
+    write_wav_f32(&take, &chatter, RATE);
+    let out = onomato(&[
+        "check",
+        "-p",
+        &format!("chatter={}", take.display()),
+        "-p",
+        "tick=examples/patterns/tick.wav",
+    ]);
+    let text = stderr(&out);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("pattern 'chatter': one sound repeated, its attacks at most 67 ms apart"),
+        "{text}"
+    );
+    assert!(!text.contains("pattern 'tick': one sound"), "{text}");
 }
 
 #[test]

@@ -69,7 +69,8 @@ pub struct OnsetRecord {
     /// The sound that the stage which decided held against it: for `speech_guard`, the
     /// sound no pattern recognised that closed the guard (the first and last of its
     /// frames counted); for `continuation`, the impulse whose own later sound it is
-    /// (its onset to its take's end); for `held_continues`, the held sound going on
+    /// (its onset to its take's end, or to this onset when a sound of one sound repeated
+    /// goes on past it); for `held_continues`, the held sound going on
     /// (its begin to the decision); for `same_onset`, the onset that fired.
     pub because_of: Option<SoundSpan>,
 }

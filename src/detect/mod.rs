@@ -322,6 +322,17 @@ impl Detector {
         }
     }
 
+    /// Spectral method: by pattern, for one whose takes are one sound repeated (a teeth
+    /// chatter, a trill), the longest gap between their attacks, seconds, within which
+    /// an instance's next attack continues it; `None` for any other. Empty for the
+    /// waveform method.
+    pub fn repeats_every_seconds(&self) -> Vec<Option<f64>> {
+        match &self.matcher {
+            Matcher::Waveform(_) => Vec::new(),
+            Matcher::Spectral(m) => m.repeats_every_seconds(),
+        }
+    }
+
     /// Spectral method: pairs of patterns whose takes look alike over the decision
     /// window (similarity at least `min_similarity`, 1 for the same), most alike first,
     /// and for a pair that parts later, how much of a sound a choice between them hears

@@ -919,6 +919,17 @@ impl SpectralMatcher {
             .collect()
     }
 
+    /// By pattern, for an impulse pattern whose takes are one sound repeated (a teeth
+    /// chatter, a trill: [`repeats_every`]), the longest gap between their attacks,
+    /// seconds: an instance goes on, however many attacks it has, while they keep that
+    /// pace ([`Self::continuation_lags`]). `None` for any other pattern.
+    pub fn repeats_every_seconds(&self) -> Vec<Option<f64>> {
+        self.patterns
+            .iter()
+            .map(|p| p.repeats_every.map(|frames| frames as f64 * HOP_SECONDS))
+            .collect()
+    }
+
     /// Pairs of patterns whose takes resemble each other over the decision window at
     /// least as much as `min_similarity` (the score an instance of one would give the
     /// other's take): pattern names and the best similarity of their takes, most alike
@@ -1259,7 +1270,10 @@ impl SpectralMatcher {
     ) -> Option<(u64, u64)> {
         match outcome {
             Outcome::SpeechGuard => self.guard_sound(time_sample, peak, guard),
-            Outcome::Continuation => self.last_impulse.map(|last| last.span),
+            // A repeated sound goes on past its take's end: up to this onset.
+            Outcome::Continuation => self
+                .last_impulse
+                .map(|last| (last.span.0, last.span.1.max(time_sample))),
             Outcome::HeldContinues => self.held.current().map(|h| (h.begin_sample, self.received)),
             _ => None,
         }
