@@ -937,16 +937,8 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
             ("pop", &pop)
         };
         let gain = 10f64.powf(rng.range(-9.0, 0.0) / 20.0) as f32;
-        truth.push(Annotation {
-            onset: rec.len() as f64 / f64::from(RATE),
-            label: label.into(),
-            end: None,
-        });
-        rec.extend(sound.iter().map(|v| v * gain));
-        rec.extend(std::iter::repeat_n(
-            0.0,
-            samples_for(rng.range(0.15, 0.6), RATE),
-        ));
+        let sound: Vec<f32> = sound.iter().map(|v| v * gain).collect();
+        append_impulse(&mut rec, &mut truth, label, &sound, rng.range(0.15, 0.6));
     }
     add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 33);
     let clicks = truth.iter().filter(|t| t.label == "click").count();
@@ -1008,16 +1000,8 @@ fn chatters_found(
             ("pop", pop.clone())
         };
         let gain = 10f64.powf(rng.range(-6.0, 0.0) / 20.0) as f32;
-        truth.push(Annotation {
-            onset: rec.len() as f64 / f64::from(RATE),
-            label: label.into(),
-            end: None,
-        });
-        rec.extend(sound.iter().map(|v| v * gain));
-        rec.extend(std::iter::repeat_n(
-            0.0,
-            samples_for(rng.range(0.3, 0.6), RATE),
-        ));
+        let sound: Vec<f32> = sound.iter().map(|v| v * gain).collect();
+        append_impulse(&mut rec, &mut truth, label, &sound, rng.range(0.3, 0.6));
     }
     add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 43);
     let chatters = truth.iter().filter(|t| t.label == "chatter").count();
