@@ -496,8 +496,8 @@ struct FiredImpulse {
     onset_frame: u64,
     strength: f64,
     /// The frame of the last onset taken for its own later sound (its own onset's until
-    /// one is): a sound of several attacks goes on past its take's end while they keep
-    /// coming at its take's pace ([`SpectralMatcher::continuation_lags`]).
+    /// one is): a sound of one sound repeated goes on, past its take's end too, while
+    /// its attacks keep coming at its takes' pace ([`SpectralMatcher::continuation_lags`]).
     last_attack_frame: u64,
 }
 
@@ -531,8 +531,6 @@ const BETWEEN_TWO_GAP: f32 = 0.1;
 /// One window more than the first: the least more of the sound that can part the two.
 const BETWEEN_TWO_WINDOWS: usize = 2;
 
-/// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
-/// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
 /// A take whose sound is one sound repeated has at least this many attacks: the first
 /// and two more, so that it repeats at a pace (a word's first and closing consonants
 /// are two).
@@ -577,6 +575,8 @@ fn repeats_every(
     lags.windows(2).map(|w| w[1] - w[0]).max()
 }
 
+/// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
+/// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
 fn pool_ring(frames: &[f32], capacity: usize, first: u64, count: usize, out: &mut [f32]) {
     let cap = capacity as u64;
     pool_power(
@@ -2064,8 +2064,8 @@ impl SpectralMatcher {
     /// while they keep coming at about its pace (each no further from the last taken
     /// for its own than the longest gap between attacks of its pattern's takes, and
     /// `CONTINUATION_SLACK_SECONDS`) and for as long as its sound may stretch
-    /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without such an impulse, or when the onset lies past its
-    /// take's end otherwise.
+    /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without
+    /// such an impulse, or when the onset lies past its take's end otherwise.
     fn continuation_lags(&self, onset_frame: u64) -> Option<(FiredImpulse, RangeInclusive<usize>)> {
         let last = self.last_impulse?;
         let after = onset_frame.saturating_sub(last.onset_frame) as usize;
