@@ -338,7 +338,7 @@ impl std::fmt::Display for Repeated {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "pattern '{}': one sound repeated, its attacks at most {:.0} ms apart; an instance is one event however many attacks it has, while they come no further apart (and 20 ms)",
+            "pattern '{}': one sound repeated, its attacks at most {:.0} ms apart; an instance is one event however many attacks it has, while they come about as close",
             self.pattern,
             self.every_seconds * 1000.0
         )
