@@ -501,6 +501,16 @@ struct FiredImpulse {
     last_attack_frame: u64,
 }
 
+/// The later sound of the last fired impulse that an onset may be
+/// ([`SpectralMatcher::continuation_lags`]).
+struct ContinuationLags {
+    last: FiredImpulse,
+    /// Frames after its take's onset whose windows the onset is compared with.
+    lags: RangeInclusive<usize>,
+    /// Every later window of a take that is one sound repeated.
+    repeated: bool,
+}
+
 /// See [`SpectralMatcher::continues_last_impulse`].
 const CONTINUATION_SLACK_SECONDS: f64 = 0.02;
 const CONTINUATION_SIMILARITY: f32 = 0.8;
@@ -1740,7 +1750,7 @@ impl SpectralMatcher {
     /// hears the tail in the onset's features, which the fired word's later sound
     /// always resembles.
     fn continues_over_tail(&mut self, time_sample: u64, onset_frame: u64, new_share: f32) -> bool {
-        let Some((last, lags)) = self.continuation_lags(onset_frame) else {
+        let Some(ContinuationLags { last, lags, .. }) = self.continuation_lags(onset_frame) else {
             return false;
         };
         let windows: [[f32; BANDS]; OVER_TAIL_WINDOWS] =
@@ -2066,7 +2076,7 @@ impl SpectralMatcher {
     /// `CONTINUATION_SLACK_SECONDS`) and for as long as its sound may stretch
     /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without
     /// such an impulse, or when the onset lies past its take's end otherwise.
-    fn continuation_lags(&self, onset_frame: u64) -> Option<(FiredImpulse, RangeInclusive<usize>)> {
+    fn continuation_lags(&self, onset_frame: u64) -> Option<ContinuationLags> {
         let last = self.last_impulse?;
         let after = onset_frame.saturating_sub(last.onset_frame) as usize;
         let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as usize;
@@ -2081,14 +2091,17 @@ impl SpectralMatcher {
         ) {
             let since_attack = onset_frame.saturating_sub(last.last_attack_frame) as usize;
             if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack {
-                return Some((last, 1..=count));
+                return Some(ContinuationLags {
+                    last,
+                    lags: 1..=count,
+                    repeated: true,
+                });
             }
         }
-        (after <= count + slack).then(|| {
-            (
-                last,
-                after.saturating_sub(slack).max(1)..=(after + slack).min(count),
-            )
+        (after <= count + slack).then(|| ContinuationLags {
+            last,
+            lags: after.saturating_sub(slack).max(1)..=(after + slack).min(count),
+            repeated: false,
         })
     }
 
@@ -2098,7 +2111,8 @@ impl SpectralMatcher {
     /// `CONTINUATION_SLACK_SECONDS`) and heard in the onset's room, sounds alike at the
     /// level the impulse's strength predicts (within `CONTINUATION_DB`). Alike: a
     /// similarity of `CONTINUATION_SIMILARITY`, or at least the best pattern's score,
-    /// so that the onset is no likelier a new sound than the last one going on. The
+    /// so that the onset is no likelier a new sound than the last one going on (against
+    /// any window of a repeated sound's take, the former alone). The
     /// second is what tells a take whose own first window scores low (a soft "f" that
     /// the room's noise half hides) from its louder later sound: an exact copy of a
     /// "fish" fired at 0.82, and the "sh" 28 ms on, 11 dB over the "f", fired again at
@@ -2109,8 +2123,21 @@ impl SpectralMatcher {
         onset_frame: u64,
         best_score: f32,
     ) -> bool {
-        let Some((last, lags)) = self.continuation_lags(onset_frame) else {
+        let Some(ContinuationLags {
+            last,
+            lags,
+            repeated,
+        }) = self.continuation_lags(onset_frame)
+        else {
             return false;
+        };
+        // Against any window of a repeated sound's take, only a sound as alike as a
+        // continuation must be: some window of it is likelier to match a new sound's
+        // low score.
+        let needed = if repeated {
+            CONTINUATION_SIMILARITY
+        } else {
+            CONTINUATION_SIMILARITY.min(best_score)
         };
         self.pool_instance(onset_frame);
         self.room.set(self.onsets.band_floors());
@@ -2132,7 +2159,7 @@ impl SpectralMatcher {
                 * last.strength
                 * last.strength;
             let db = 10.0 * (energy.max(1e-20) / expected.max(1e-20)).log10();
-            let alike = similarity >= CONTINUATION_SIMILARITY.min(best_score);
+            let alike = similarity >= needed;
             if alike && db.abs() <= CONTINUATION_DB {
                 return true;
             }
