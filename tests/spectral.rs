@@ -1039,6 +1039,56 @@ fn a_chatter_at_the_pace_of_any_of_its_takes_is_one_event() {
     );
 }
 
+/// The continuation of a repeated sound takes only what sounds like it: a "pop" or a
+/// hit said right after a chatter, within its pace, is its own event.
+#[test]
+fn a_sound_right_after_a_chatter_is_not_taken_for_it() {
+    let settings = spectral();
+    let click = noise_burst(RATE, 0.006, 0.0008, 41);
+    let pop = sweep(RATE, 0.12, 400.0, 150.0, 0.03);
+    let hit = noise_burst(RATE, 0.08, 0.02, 45);
+    let patterns = vec![
+        Pattern::from_samples(
+            "chatter",
+            PatternKind::Impulse,
+            vec![chatter(&click, 4, 15.0)],
+            &settings,
+        )
+        .unwrap(),
+        Pattern::from_samples("pop", PatternKind::Impulse, vec![pop.clone()], &settings).unwrap(),
+        Pattern::from_samples("hit", PatternKind::Impulse, vec![hit.clone()], &settings).unwrap(),
+    ];
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    for (k, after) in [("pop", &pop), ("hit", &hit)]
+        .iter()
+        .cycle()
+        .take(8)
+        .enumerate()
+    {
+        // Six clicks at 14.5 a second (not the take's pace, which would repeat the take
+        // sample for sample: a copy of it), then the other sound 50 ms after the last.
+        let clicks = chatter(&click, 6, 14.5);
+        let quiet = 0.05 - click.len() as f64 / f64::from(RATE);
+        append_impulse(&mut rec, &mut truth, "chatter", &clicks, quiet);
+        append_impulse(
+            &mut rec,
+            &mut truth,
+            after.0,
+            after.1,
+            0.5 + 0.05 * k as f64,
+        );
+    }
+    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 46);
+    let (events, outcomes) = detect_explained(patterns, &settings, &rec);
+    let s = score(&events, &truth, 0.05);
+    assert!(
+        s.overall.f1 >= 0.99,
+        "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}
+
 /// Brown noise (white noise through a leaky integrator) of RMS `rms`, added to `rec`:
 /// rumble whose power lies mostly far under the 80 Hz the bands start at, and wanders.
 fn add_rumble(rec: &mut [f32], rms: f64, seed: u64) {
