@@ -19,7 +19,6 @@
 # - voice-takes, voices-takes, voices-more-takes: scripts/more-voice-takes.py, the
 #   voice protocol of the dev sets and of both unheard folders with three takes a word;
 # - every other row: scripts/room-sets.sh on the dev sets, with the arguments shown.
-# Making every row takes about half an hour on two cores, scoring them as long again.
 # Needs what build.sh, other-voices.py and room-sets.sh need (espeak-ng, sox, ffmpeg).
 set -euo pipefail
 usage="usage: robustness.sh ONOMATO_BIN SETS_DIR WORK_DIR [ROW ...]"
