@@ -9,7 +9,7 @@
 #   bash ../shared/devsets/build.sh /tmp/devsets
 #   bash scripts/robustness.sh target/release/onomato /tmp/devsets /tmp/robustness [ROW ...]
 #
-# With ROWs (names of the first column), only those. The rows and what makes them:
+# With ROWs (the names in `rows` below), only those. The rows and what makes them:
 # - voices, voices-more, exact: scripts/other-voices.py (six unheard espeak-ng voices,
 #   six more, and the exact-copies protocol for their words);
 # - take2, take3: scripts/other-takes.py, the real sets enrolled from another take;
@@ -37,37 +37,37 @@ bin=$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")
 [[ -x $bin ]] || { echo "robustness.sh: $bin is not an executable file" >&2; exit 1; }
 mkdir -p "$work"
 
-# name|how it is made (shown in the table)|folder|scored through
+# name|what it is|how it is made|folder|scored through
 rows=(
-  "voices|other-voices.py|voices|plain"
-  "voices-more|other-voices.py --more|voices-more|plain"
-  "exact|other-voices.py --exact|exact|plain"
-  "take2|other-takes.py 1|take2|plain"
-  "take3|other-takes.py 2|take3|plain"
-  "take1-of-2|more-takes.py 2, take 1 alone|takes2|plain"
-  "takes1-2|more-takes.py 2|takes2|takes"
-  "take1-of-3|more-takes.py 3, take 1 alone|takes3|plain"
-  "takes1-3|more-takes.py 3|takes3|takes"
-  "voice-takes|more-voice-takes.py, the dev voices|voice-takes|takes"
-  "voices-takes|more-voice-takes.py, voices|voices-takes|takes"
-  "voices-more-takes|more-voice-takes.py, voices-more|voices-more-takes|takes"
-  "room-0.47s|reverb 25|room25|plain"
-  "room-1.32s|reverb 50|room50|plain"
-  "room-0.47s-dry-takes|reverb 25 100 sequences|room25s|plain"
-  "room-1.32s-dry-takes|reverb 50 100 sequences|room50s|plain"
-  "brown|noise brownnoise -30|brown|plain"
-  "pink|noise pinknoise -40|pink|plain"
-  "hum-50|hum 50 -40|hum50|plain"
-  "hum-60|hum 60 -40|hum60|plain"
-  "gate|gate 10|gate10|plain"
-  "mp3-64|mp3 64|mp3-64|plain"
-  "mp3-32|mp3 32|mp3-32|plain"
-  "silence|silence 0.5|silence|plain"
-  "head|head 0.002|head|plain"
-  "rate-16k|rate 16000|rate16k|plain"
-  "rate-8k|rate 8000|rate8k|plain"
-  "lowpass|lowpass 6300|lowpass|plain"
-  "lowpass-seq|lowpass 6300 sequences|lowpass-seq|plain"
+  "voices|six espeak-ng voices that no set, test or background speech uses: their words, rhythm and own speech|other-voices.py|voices|plain"
+  "voices-more|six further voices|other-voices.py --more|voices-more|plain"
+  "exact|exact copies of those twelve voices' words (the protocol of D5_exact)|other-voices.py --exact|exact|plain"
+  "take2|the real sets enrolled from each label's second take|other-takes.py 1|take2|plain"
+  "take3|... from its third take|other-takes.py 2|take3|plain"
+  "take1-of-2|the real sets, take 1 alone enrolling, scored on the takes after the second|more-takes.py 2, take 1 alone|takes2|plain"
+  "takes1-2|... takes 1 and 2 enrolling, on the same takes|more-takes.py 2|takes2|takes"
+  "take1-of-3|the real sets, take 1 alone enrolling, scored on the takes after the third|more-takes.py 3, take 1 alone|takes3|plain"
+  "takes1-3|... takes 1 to 3 enrolling, on the same takes|more-takes.py 3|takes3|takes"
+  "voice-takes|the dev sets' voices, three takes of each word (at 145, 160 and 175 words a minute)|more-voice-takes.py, the dev voices|voice-takes|takes"
+  "voices-takes|the six unheard voices, the same|more-voice-takes.py, voices|voices-takes|takes"
+  "voices-more-takes|the six further voices, the same|more-voice-takes.py, voices-more|voices-more-takes|takes"
+  "room-0.47s|a room of RT60 0.47 s (an office), takes and sequences|reverb 25|room25|plain"
+  "room-1.32s|a room of RT60 1.32 s (bare, hard walls)|reverb 50|room50|plain"
+  "room-0.47s-dry-takes|enrolled dry, performed in the 0.47 s room|reverb 25 100 sequences|room25s|plain"
+  "room-1.32s-dry-takes|enrolled dry, performed in the 1.32 s room|reverb 50 100 sequences|room50s|plain"
+  "brown|brown noise (rumble) 30 dB under full scale|noise brownnoise -30|brown|plain"
+  "pink|pink noise 40 dB under full scale|noise pinknoise -40|pink|plain"
+  "hum-50|mains buzz at 50 Hz and its harmonics, 40 dB down|hum 50 -40|hum50|plain"
+  "hum-60|... at 60 Hz|hum 60 -40|hum60|plain"
+  "gate|through a noise gate 10 dB over the room, held 0.1 s|gate 10|gate10|plain"
+  "mp3-64|decoded from MP3 at 64 kbit/s|mp3 64|mp3-64|plain"
+  "mp3-32|... at 32 kbit/s (a voice call)|mp3 32|mp3-32|plain"
+  "silence|0.5 s of digital silence before each sequence|silence 0.5|silence|plain"
+  "head|each sequence cut 2 ms before its first sound|head 0.002|head|plain"
+  "rate-16k|every file at 16 kHz (a headset)|rate 16000|rate16k|plain"
+  "rate-8k|every file at 8 kHz (a telephone)|rate 8000|rate8k|plain"
+  "lowpass|every file low-passed at 6.3 kHz, at its own rate|lowpass 6300|lowpass|plain"
+  "lowpass-seq|the sequences alone low-passed so (takes from a good microphone)|lowpass 6300 sequences|lowpass-seq|plain"
 )
 
 make_folder() {  # name how folder
@@ -98,25 +98,27 @@ make_folder() {  # name how folder
   esac >&2
 }
 
-row() {  # name how folder scoring
-  local name=$1 how=$2 folder=$work/$3 scoring=$4 summary=$work/$1.summary.json
-  make_folder "$name" "$how" "$3"
+row() {  # name what how folder scoring
+  local name=$1 what=$2 how=$3 folder=$work/$4 scoring=$5 summary=$work/$1.summary.json
+  make_folder "$name" "$how" "$4"
   local binary=$bin
   if [[ $scoring == takes ]]; then
     binary=$here/with-more-takes.sh
     export ONOMATO=$bin
   fi
   TAG=robustness SUMMARY=$summary bash "$run" "$binary" "$folder" >/dev/null
-  python3 - "$name" "$how" "$summary" <<'EOF'
+  python3 - "$what" "$how" "$summary" <<'EOF'
 import json, sys
-name, how, path = sys.argv[1:]
+what, how, path = sys.argv[1:]
 s = json.load(open(path))
 positive = {k: v for k, v in s["sets"].items() if v.get("f1") is not None}
 worst = min(positive.items(), key=lambda kv: kv[1]["f1"]) if positive else None
 families = " / ".join(f"{f} {v:.3f}" for f, v in s["mean_f1_by_family"].items())
 f1 = s["mean_f1_positive"]
 speech = s.get("false_per_min_negative")
-print(f"| {name} | {how} | {f1:.3f} | " + (f"{worst[1]['f1']:.3f} ({worst[0]})" if worst else "-")
+script = how if how.split()[0].rstrip(",").endswith(".py") else f"room-sets.sh ... {how}"
+made = f"`{script.split(',')[0]}`" + ("," + script.split(",", 1)[1] if "," in script else "")
+print(f"| {what} | {made} | {f1:.3f} | " + (f"{worst[1]['f1']:.3f} ({worst[0]})" if worst else "-")
       + f" | {families} | " + (f"{speech:.2f}" if s.get("negative_sets") else "-") + " |")
 EOF
 }
@@ -127,14 +129,14 @@ for w in "${wanted[@]}"; do
   for r in "${rows[@]}"; do [[ ${r%%|*} == "$w" ]] && known=1; done
   [[ $known == 1 ]] || { echo "robustness.sh: no row '$w'; the rows: $(printf '%s ' "${rows[@]%%|*}")" >&2; exit 2; }
 done
-echo "| row | made by | mean F1 | worst set | per family | speech, false events a minute |"
+echo "| protocol | made by | mean F1 | worst set | per family | speech (false events a minute) |"
 echo "|---|---|---|---|---|---|"
 for r in "${rows[@]}"; do
-  IFS='|' read -r name how folder scoring <<<"$r"
+  IFS='|' read -r name what how folder scoring <<<"$r"
   if [[ ${#wanted[@]} -gt 0 ]]; then
     keep=0
     for w in "${wanted[@]}"; do [[ $w == "$name" ]] && keep=1; done
     [[ $keep == 1 ]] || continue
   fi
-  row "$name" "$how" "$folder" "$scoring"
+  row "$name" "$what" "$how" "$folder" "$scoring"
 done
