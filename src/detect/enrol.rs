@@ -588,15 +588,9 @@ pub(super) fn take_placements(
     };
     let attacks: Vec<usize> = placed_quietly
         .iter()
-        .copied()
-        .take(1)
-        .chain(
-            placed_quietly
-                .iter()
-                .copied()
-                .skip(1)
-                .filter(|&at| rises(at)),
-        )
+        .enumerate()
+        .filter(|&(k, &at)| k == 0 || rises(at))
+        .map(|(_, &at)| at)
         .collect();
     TakePlacements {
         first,
