@@ -1540,3 +1540,66 @@ fn a_recording_that_begins_with_a_sound_finds_it() {
         );
     }
 }
+
+/// A hiss that swells for `lead` seconds (steady bright noise, `soft_db` under the
+/// attack's first milliseconds) before its attack: a "ts" said slowly.
+fn swelling_hat(lead: f64, soft_db: f64, seed: u64) -> Vec<f32> {
+    let gain = 10f32.powf(soft_db as f32 / 20.0);
+    let attack = hat(seed);
+    let peak = attack[..samples_for(0.003, RATE)]
+        .iter()
+        .fold(0.0f32, |m, v| m.max(v.abs()));
+    let mut rng = Rng::new(seed + 1000);
+    let hiss: Vec<f32> = (0..samples_for(lead + 0.002, RATE))
+        .map(|_| rng.normal() as f32)
+        .collect();
+    let hiss = brighten(&brighten(&hiss));
+    let hiss_peak = hiss.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    let mut s: Vec<f32> = hiss[..samples_for(lead, RATE)]
+        .iter()
+        .map(|v| v * gain * peak / hiss_peak)
+        .collect();
+    s.extend(attack);
+    s
+}
+
+/// A sound whose soft start the detector can already name, a hiss that swells for
+/// 18-30 ms before its attack, fired once there and once more at its attack, 10-20 dB
+/// louder: that attack rose out of the impulse's own start, not out of quiet. It is one
+/// event, named where the sound began.
+#[test]
+fn a_hiss_that_swells_before_its_attack_is_one_event() {
+    let settings = DetectorSettings {
+        min_strength: 0.0,
+        ..spectral()
+    };
+    let mut rng = Rng::new(41);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut truth = Vec::new();
+    for i in 0..30u64 {
+        let lead = rng.range(0.018, 0.030);
+        let soft_db = rng.range(-24.0, -18.0);
+        let gain = 10f64.powf(rng.range(-6.0, 0.0) / 20.0) as f32;
+        let sound: Vec<f32> = swelling_hat(lead, soft_db, 200 + i)
+            .iter()
+            .map(|v| v * gain)
+            .collect();
+        append_impulse(&mut rec, &mut truth, "ts", &sound, rng.range(0.2, 0.5));
+    }
+    add_noise(&mut rec, 0.0005, 42);
+    let (events, outcomes) = detect_explained(enrol(&settings), &settings, &rec);
+    for pair in events.windows(2) {
+        assert!(
+            pair[1].time - pair[0].time >= 0.05,
+            "one hiss, two events: {:?} and {:?}; onsets considered: {outcomes:?}",
+            (pair[0].time, &pair[0].pattern),
+            (pair[1].time, &pair[1].pattern)
+        );
+    }
+    let s = score(&events, &truth, 0.05);
+    assert!(
+        s.overall.f1 >= 0.95,
+        "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}

@@ -18,7 +18,8 @@ pub enum Outcome {
     QuietBefore,
     /// The speech guard: it follows unrecognised sound.
     SpeechGuard,
-    /// The last impulse's own later sound (the closing "p" of a "pop").
+    /// The last impulse's own later sound (the closing "p" of a "pop", or its attack
+    /// after the soft start it fired on).
     Continuation,
     /// No pattern scored its threshold: none of the patterns.
     BelowThreshold,
@@ -105,7 +106,8 @@ pub struct Evidence {
     /// The speech guard's span before the onset held enough unrecognised sound.
     pub follows_unrecognised_sound: bool,
     /// It is the last fired impulse's own later sound (over that impulse's tail, when
-    /// named by what a take adds to it: by what the impulse's take adds as much later).
+    /// named by what a take adds to it: by what the impulse's take adds as much later),
+    /// or that impulse's attack after the soft start it fired on.
     pub continues_last_impulse: bool,
     /// The best pattern's score, whether it is an impulse, and its threshold.
     pub best_score: f32,

@@ -51,7 +51,10 @@
 //! across the room, a breath) and does not fire either. Nor does an onset inside the
 //! last impulse's take that the take itself has at that time, at that level, and that
 //! resembles it as well as its best pattern does or nearly as well as a take resembles
-//! itself (the closing "p" of a "pop"): see `SpectralMatcher::continues_last_impulse`.
+//! itself (the closing "p" of a "pop"): see `SpectralMatcher::continues_last_impulse`;
+//! nor, when the last impulse fired on a soft start, the attack that rose out of it,
+//! named by the same pattern within the 40 ms the quiet-before gate looks back over
+//! (`SpectralMatcher::attack_after_soft_start`).
 //!
 //! Exact copies: an onset that did not fire (but by the speech guard) is checked once
 //! 0.25 s of its sound is in, by its waveform against each impulse take; a copy of a
@@ -1666,7 +1669,7 @@ impl SpectralMatcher {
                 time_sample,
                 onset_frame,
                 self.pattern_scores[best].score,
-            ),
+            ) || self.attack_after_soft_start(onset_frame, best),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
             best_is_impulse: false,
@@ -2102,6 +2105,23 @@ impl SpectralMatcher {
             last,
             lags: after.saturating_sub(slack).max(1)..=(after + slack).min(count),
             repeated: false,
+        })
+    }
+
+    /// Whether the onset at frame `onset_frame`, whose best pattern is `best`, is the
+    /// attack of the last impulse, which fired on its soft start (a hiss that swells
+    /// before its attack): it lies so soon after that impulse's onset that the quiet it
+    /// rose out of (`PRE_QUIET_FROM_SECONDS` before it) is that impulse's own sound, and
+    /// the same pattern names it. The take, placed on its own attack, has no such attack
+    /// in its later windows to tell it by. Another pattern's sound there is judged as
+    /// any other onset: the first to fire is not always the one that names the sound
+    /// (`docs/classify.md`, "A sound's attack after its soft start fired").
+    fn attack_after_soft_start(&self, onset_frame: u64, best: usize) -> bool {
+        self.last_impulse.is_some_and(|last| {
+            let after = onset_frame.saturating_sub(last.onset_frame);
+            after > 0
+                && after <= quiet_before_frames()
+                && self.templates[last.template].pattern == best
         })
     }
 
