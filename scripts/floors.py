@@ -4,8 +4,9 @@
 Reads what `run.sh` wrote (the summary and each sequence's detections) and scores the
 sequences some floors are about with the dev sets' scorer: the rhythm at 150 bpm (each
 D4 set's seq_02) and D1_noise_zingerbox's onset F1 at each noise level (its seq_00 to
-seq_04). Prints one Markdown row per floor: what is asked, what was measured, whether it
-is met, and where it is not, which sets miss it. A floor about sets that SETS_DIR does
+seq_04; so too any other D1_noise_* set, such as `scripts/noise-sweeps.py` makes).
+Prints one Markdown row per floor: what is asked, what was measured, whether it is met,
+and where it is not, which sets miss it. A floor about sets that SETS_DIR does
 not hold is left out, so the same command checks the sets of other voices and rooms
 (`scripts/other-voices.py`, `scripts/room-sets.sh`). Exit status 0 when every floor is
 met, 1 when some is not, 2 when the summary or a detection file is missing.
@@ -108,11 +109,11 @@ def main():
             extra=f"; highest {max(rhythms.values()):.3f}",
         )
 
-    if "D1_noise_zingerbox" in positive:
+    for name in sorted(k for k in positive if k.startswith("D1_noise_")):
         for i, (level, at_least) in enumerate(NOISE_LEVELS):
-            onset_f1 = score(root / "D1_noise_zingerbox", f"seq_{i:02d}", tag)["onset_f1"]
+            onset_f1 = score(root / name, f"seq_{i:02d}", tag)["onset_f1"]
             floor(
-                f"onset F1 of D1_noise_zingerbox at {level} ≥ {at_least:.2f}",
+                f"onset F1 of {name} at {level} ≥ {at_least:.2f}",
                 f"{onset_f1:.3f}",
                 onset_f1 >= at_least,
             )

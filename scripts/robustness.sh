@@ -18,6 +18,8 @@
 #   enrolled from take 1 alone (take1-of-2, take1-of-3), on the same later takes;
 # - voice-takes, voices-takes, voices-more-takes: scripts/more-voice-takes.py, the
 #   voice protocol of the dev sets and of both unheard folders with three takes a word;
+# - noise-sweeps: scripts/noise-sweeps.py, zingerbox's noise sweep made of the other
+#   kits' hits;
 # - every other row: scripts/room-sets.sh on the dev sets, with the arguments shown.
 # Needs what build.sh, other-voices.py and room-sets.sh need (espeak-ng, sox, ffmpeg).
 set -euo pipefail
@@ -51,6 +53,7 @@ rows=(
   "voice-takes|the dev sets' voices, three takes of each word (at 145, 160 and 175 words a minute)|more-voice-takes.py, the dev voices|voice-takes|takes"
   "voices-takes|the six unheard voices, the same|more-voice-takes.py, voices|voices-takes|takes"
   "voices-more-takes|the six further voices, the same|more-voice-takes.py, voices-more|voices-more-takes|takes"
+  "noise-sweeps|the noise sweep of D1_noise_zingerbox (-60 to -35 dB), made of the AGH and both mitrank kits' hits|noise-sweeps.py|noise-sweeps|plain"
   "room-0.47s|a room of RT60 0.47 s (an office), takes and sequences|reverb 25|room25|plain"
   "room-1.32s|a room of RT60 1.32 s (bare, hard walls)|reverb 50|room50|plain"
   "room-0.47s-dry-takes|enrolled dry, performed in the 0.47 s room|reverb 25 100 sequences|room25s|plain"
@@ -91,6 +94,7 @@ make_folder() {  # name how folder
       make_folder voices-more "other-voices.py --more" voices-more
       "$py" "$here/more-voice-takes.py" "$work/voices-more" "$out"
       ;;
+    noise-sweeps) "$py" "$here/noise-sweeps.py" "$out" ;;
     *)
       # shellcheck disable=SC2086  # the room's arguments, word by word
       bash "$here/room-sets.sh" "$sets" "$out" $how >/dev/null
