@@ -293,7 +293,8 @@ pub struct AnalyzeArgs {
     /// it resembled most, their scores, how much of its sound the choice heard, and what
     /// became of it and which stage decided (fired, quiet_before, speech_guard,
     /// continuation, below_threshold, background, held_continues, min_strength,
-    /// same_onset): a table on stderr, and an "onsets" array in the JSON output.
+    /// same_onset; and a later record for an onset that fired later: copy, fell_away): a
+    /// table on stderr, and an "onsets" array in the JSON output.
     #[arg(long)]
     pub explain: bool,
 }

@@ -393,7 +393,7 @@ impl Default for DetectorSettings {
             channel: None,
             decision_seconds: 0.025,
             max_decision_seconds: 0.055,
-            speech_guard_seconds: 0.65,
+            speech_guard_seconds: DEFAULT_SPEECH_GUARD_SECONDS,
             min_strength: 0.06,
             background: Vec::new(),
         }
@@ -1283,6 +1283,8 @@ fn check_thresholds(
 
 /// Longest `speech_guard_seconds`: the detector keeps this much history.
 pub const MAX_SPEECH_GUARD_SECONDS: f64 = 1.0;
+/// The speech guard's span when the config does not set it (`speech_guard_seconds`).
+pub const DEFAULT_SPEECH_GUARD_SECONDS: f64 = 0.65;
 
 impl DetectorSettings {
     /// Match threshold for patterns that do not set their own.

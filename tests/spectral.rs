@@ -1603,3 +1603,92 @@ fn a_hiss_that_swells_before_its_attack_is_one_event() {
         onomato::eval::render_text(&s)
     );
 }
+
+/// Noise brightened once (6 dB an octave), `seconds` long, under a decay of `decay`
+/// seconds: a duller hiss than [`hat`].
+fn soft_hiss(seconds: f64, decay: f64, seed: u64) -> Vec<f32> {
+    brighten(&noise_burst(RATE, seconds, decay, seed))
+}
+
+/// The background stage takes for speech a sound that lies nearer its speech than its
+/// take: here hisses unlike the enrolled "ts" and like the "s" of every syllable of the
+/// background recording. A hiss that then falls away unvoiced is a hit, and fires once
+/// its sound shows it (`fell_away`), dated at its onset; the same hiss running into a
+/// vowel, as the recording's syllables do, is speech and fires nothing.
+#[test]
+fn a_hit_the_background_took_for_speech_fires_once_it_fell_away_and_a_syllable_does_not() {
+    let vowel = |seed: u64| -> Vec<f32> {
+        let mut x = soft_hiss(0.04, 1e9, seed);
+        let body = buzz(RATE, 0.25, 120.0 + (seed % 7) as f64 * 10.0);
+        let gain = rms(&x) / rms(&body);
+        x.extend(body.iter().map(|v| v * gain as f32));
+        x
+    };
+    let gap = samples_for(0.6, RATE);
+    let mut talking = vec![0.0f32; 12 * gap];
+    for k in 1..11 {
+        place(&mut talking, &vowel(50 + k as u64), k * gap, 0.5);
+    }
+    add_noise(&mut talking, 1e-4, 3);
+    let dir = temp_dir("fell-away");
+    let talking_wav = dir.join("talking.wav");
+    write_wav_f32(&talking_wav, &talking, RATE);
+    let settings = DetectorSettings {
+        background: vec![talking_wav],
+        ..spectral()
+    };
+    // Brighter still than a hat (18 dB an octave).
+    let patterns = vec![impulse("ts", brighten(&hat(1)), &settings)];
+
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut hits = Vec::new();
+    let mut syllables = Vec::new();
+    for k in 0..16u64 {
+        let at = rec.len() as f64 / f64::from(RATE);
+        if k % 2 == 0 {
+            hits.push(at);
+            rec.extend(soft_hiss(0.12, 0.012, 100 + k).iter().map(|v| v * 0.5));
+        } else {
+            syllables.push(at);
+            rec.extend(vowel(200 + k).iter().map(|v| v * 0.5));
+        }
+        rec.extend(vec![0.0; samples_for(0.7, RATE)]);
+    }
+    add_noise(&mut rec, 1e-4, 4);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let records = det.take_explain().unwrap();
+    let outcome_near = |t: f64, outcome: &str| {
+        records
+            .iter()
+            .any(|r| (r.time - t).abs() < 0.01 && r.outcome.as_str() == outcome)
+    };
+    for &t in &hits {
+        assert!(
+            outcome_near(t, "background") && outcome_near(t, "fell_away"),
+            "the hit at {t:.3} s: {:?}",
+            records
+                .iter()
+                .filter(|r| (r.time - t).abs() < 0.05)
+                .collect::<Vec<_>>()
+        );
+        assert!(
+            events.iter().any(|e| &*e.pattern == "ts"
+                && (e.time - t).abs() < 0.005
+                && e.emitted_at >= e.time + 0.075),
+            "no ts at {t:.3} s: {events:?}"
+        );
+    }
+    for &t in &syllables {
+        assert!(
+            !events.iter().any(|e| (e.time - t).abs() < 0.3),
+            "the syllable at {t:.3} s fired: {:?}",
+            records
+                .iter()
+                .filter(|r| (r.time - t).abs() < 0.3)
+                .collect::<Vec<_>>()
+        );
+    }
+    assert_eq!(events.len(), hits.len(), "{events:?}");
+}

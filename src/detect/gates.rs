@@ -36,6 +36,10 @@ pub enum Outcome {
     /// the takes, sample for sample (the copies stage, `src/detect/copies.rs`). A second
     /// record of that onset, dated where the take's onset falls.
     Copy,
+    /// Fired later: the background took it for speech, but its sound fell away unvoiced
+    /// after it, as a hit's does and a syllable's, which runs into its vowel, does not
+    /// (the syllable stage, `src/detect/syllable.rs`). A second record of that onset.
+    FellAway,
 }
 
 impl Outcome {
@@ -51,6 +55,7 @@ impl Outcome {
             Outcome::MinStrength => "min_strength",
             Outcome::SameOnset => "same_onset",
             Outcome::Copy => "copy",
+            Outcome::FellAway => "fell_away",
         }
     }
 }

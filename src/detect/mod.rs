@@ -24,6 +24,7 @@ mod passband;
 mod pitch;
 mod place;
 pub mod spectral;
+mod syllable;
 pub mod waveform;
 
 use std::path::{Path, PathBuf};

@@ -1,5 +1,6 @@
 //! The pitch stage: the fundamental frequency of a held voiced sound, by normalised
-//! autocorrelation over the middle of its samples. Runs on the detector thread when a
+//! autocorrelation over the middle of its samples, and how voiced a stretch of sound is
+//! (for the syllable stage, [`super::syllable`]). Runs on the detector thread when a
 //! held sound ends; its buffers (the samples correlated, a correlation per lag) are made
 //! once, so it allocates nothing.
 
@@ -8,7 +9,7 @@ const PITCH_MAX_HZ: f64 = 500.0;
 /// The longest stretch of the sound that is correlated.
 const PITCH_WINDOW_SECONDS: f64 = 0.1;
 /// A held sound is voiced when its autocorrelation reaches this at some lag.
-const VOICED_CORRELATION: f64 = 0.6;
+pub(super) const VOICED_CORRELATION: f64 = 0.6;
 
 pub(super) struct PitchEstimator {
     rate: f64,
@@ -40,11 +41,39 @@ impl PitchEstimator {
         hi: u64,
         sample: impl Fn(u64) -> f32,
     ) -> Option<f64> {
+        let min_lag = self.correlate(lo, hi, 2, sample)?;
+        pitch_from_correlations(&self.by_lag, min_lag, self.rate)
+    }
+
+    /// How voiced samples [lo, hi) are: their best normalised correlation at a lag of one
+    /// period of 60-500 Hz, over the middle of the span (0 when it holds less than two of
+    /// the longest periods). A voice's vowel reaches [`VOICED_CORRELATION`]; a hiss, a
+    /// click's decay and a room's noise stay far under it.
+    pub(super) fn voicing(&mut self, lo: u64, hi: u64, sample: impl Fn(u64) -> f32) -> f64 {
+        match self.correlate(lo, hi, 1, sample) {
+            Some(_) => self.by_lag[1..self.by_lag.len() - 1]
+                .iter()
+                .fold(0.0, |best, &c| best.max(c)),
+            None => 0.0,
+        }
+    }
+
+    /// Fills `by_lag` with the normalised correlation of the middle of samples [lo, hi)
+    /// at every lag of `min_lag - 1 ..= max_lag + 1`, over a stretch of at least
+    /// `periods` of the longest period (at most `PITCH_WINDOW_SECONDS`); returns
+    /// `min_lag`, or `None` when the span is too short.
+    fn correlate(
+        &mut self,
+        lo: u64,
+        hi: u64,
+        periods: u64,
+        sample: impl Fn(u64) -> f32,
+    ) -> Option<u64> {
         let min_lag = (self.rate / PITCH_MAX_HZ).floor() as u64;
         let max_lag = (self.rate / PITCH_MIN_HZ).ceil() as u64;
         let span = hi.saturating_sub(lo);
         let len = ((PITCH_WINDOW_SECONDS * self.rate) as u64).min(span.saturating_sub(max_lag + 1));
-        if len < 2 * max_lag {
+        if len < periods * max_lag {
             return None;
         }
         let start = lo + (span - len - max_lag) / 2;
@@ -71,7 +100,7 @@ impl PitchEstimator {
         for (slot, lag) in self.by_lag.iter_mut().zip(min_lag - 1..=max_lag as u64 + 1) {
             *slot = correlation(lag);
         }
-        pitch_from_correlations(&self.by_lag, min_lag, self.rate)
+        Some(min_lag)
     }
 }
 
@@ -132,6 +161,31 @@ mod tests {
             let pitch = estimate(&buzz(f0, 0.3)).expect("voiced");
             assert!((pitch / f0 - 1.0).abs() < 0.01, "{f0} Hz: {pitch}");
         }
+    }
+
+    #[test]
+    fn a_buzz_is_voiced_and_noise_is_not() {
+        let mut pitch = PitchEstimator::new(RATE);
+        // 50 ms: the span the syllable stage asks about.
+        let n = (0.05 * RATE) as usize;
+        for f0 in [80.0, 150.0, 300.0] {
+            let x = buzz(f0, 0.05);
+            let v = pitch.voicing(0, n as u64, |k| x[k as usize]);
+            assert!(v >= VOICED_CORRELATION, "{f0} Hz: {v}");
+        }
+        let mut state = 7u64;
+        let noise: Vec<f32> = (0..n)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
+            })
+            .collect();
+        let v = pitch.voicing(0, n as u64, |k| noise[k as usize]);
+        assert!(v < 0.3, "noise: {v}");
+        // Shorter than one of the longest periods (60 Hz) and the lag itself.
+        assert_eq!(pitch.voicing(0, 400, |k| noise[k as usize]), 0.0);
     }
 
     #[test]

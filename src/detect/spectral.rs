@@ -99,8 +99,9 @@ use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
+use super::syllable::{SecondLooks, SyllableParams, Waiting};
 use super::Event;
-use crate::config::{DetectorSettings, PatternKind};
+use crate::config::{DetectorSettings, PatternKind, DEFAULT_SPEECH_GUARD_SECONDS};
 use crate::pattern::Pattern;
 
 /// The frames between these times before an onset are the quiet it must rise out of
@@ -456,6 +457,9 @@ pub struct SpectralMatcher {
     /// Onsets that did not fire, checked for an exact copy of a take once its sound is
     /// in ([`Copies`]).
     copies: Copies,
+    /// The impulses the background took for speech, waiting to be heard again once it is
+    /// known whether their sound went on as a syllable's.
+    second_looks: SecondLooks,
 }
 
 /// Two patterns whose takes look alike over the decision window
@@ -748,6 +752,8 @@ impl SpectralMatcher {
         };
         let templates_len = templates.len();
         let copies = Copies::new(copy_takes.into_iter(), rate);
+        let second_looks =
+            SecondLooks::new(SyllableParams::default(), rate, settings.decision_seconds);
         let mut matcher = Self {
             rate,
             decision_frames,
@@ -829,6 +835,7 @@ impl SpectralMatcher {
             carried_top_hz: carried,
             passband: Passband::new(rate),
             copies,
+            second_looks,
         };
         let bands = matcher.analyzer.cepstrum.bands();
         // Whatever bands the stream leaves compared, no pair waits longer than this.
@@ -1118,7 +1125,10 @@ impl SpectralMatcher {
     /// are at least 20 ms apart and wait at most `max_decision_seconds`, so none on
     /// any input so far).
     pub fn dropped_onsets(&self) -> u64 {
-        self.placer.dropped() + self.pending_dropped + self.copies.dropped()
+        self.placer.dropped()
+            + self.pending_dropped
+            + self.copies.dropped()
+            + self.second_looks.dropped()
     }
 
     pub fn finish(&mut self, out: &mut Vec<Event>) {
@@ -1132,7 +1142,7 @@ impl SpectralMatcher {
                 * self.hop()
                 + self.analyzer.win
                 + (self.held.params().gap_seconds * self.rate) as usize
-                + self.copies.reach() as usize;
+                + self.copies.reach().max(self.second_looks.reach()) as usize;
         let end = self.received;
         const ZEROS: [f32; 256] = [0.0; 256];
         let mut left = pad;
@@ -1206,6 +1216,7 @@ impl SpectralMatcher {
         }
         self.decide_pending(out);
         self.check_copies(out);
+        self.check_second_looks(out);
         self.follow_held(f, out);
         self.follow_stopped_held(f);
     }
@@ -1391,6 +1402,22 @@ impl SpectralMatcher {
             self.record(&decision);
         }
         self.cover_stopped(&decision);
+        // Over a fired word's tail the sound after the onset is partly that word's; after
+        // talk, a word's last consonant falls away unvoiced too. What counts as talk is
+        // what the speech guard counts over its usual span, whatever it is set to: the
+        // user who turns it off wants hits right after talking found, not talk.
+        if outcome == Outcome::Background
+            && self.patterns[decision.pattern].kind == PatternKind::Impulse
+            && !decision.evidence.over_fired_impulse
+            && self.clear_of_talk_as_usual(time_sample, decision.peak)
+        {
+            self.second_looks.wait(Waiting {
+                time_sample,
+                pattern: decision.pattern,
+                strength: decision.evidence.strength,
+                score: decision.evidence.best_score,
+            });
+        }
         if outcome == Outcome::Continuation {
             if let Some(last) = &mut self.last_impulse {
                 last.last_attack_frame = onset_frame;
@@ -1606,6 +1633,56 @@ impl SpectralMatcher {
                     strength: Some(event.strength),
                     window_seconds: Some(found.len as f64 / self.rate),
                     ..OnsetRecord::unscored(event.time, event.emitted_at, Outcome::Copy)
+                });
+            }
+            out.push(event);
+        }
+    }
+
+    /// Whether the onset at `time_sample` (its sound's peak `peak`, dB) was heard clear
+    /// of talk over the speech guard's default span ([`Context::guard`]).
+    fn clear_of_talk_as_usual(&self, time_sample: u64, peak: f32) -> bool {
+        let span = (DEFAULT_SPEECH_GUARD_SECONDS * self.rate) as u64;
+        self.context
+            .guard(self.frames_before(time_sample, span), peak)
+            .clear_of_talk
+    }
+
+    /// Fires each impulse the background took for speech whose sound has since fallen
+    /// away unvoiced ([`super::syllable`]), dated at its onset.
+    fn check_second_looks(&mut self, out: &mut Vec<Event>) {
+        loop {
+            let samples = &self.samples;
+            let Some((onset, afterwards)) =
+                self.second_looks.due(self.consumed, &mut self.pitch, |n| {
+                    samples[ring_slot(samples, n)]
+                })
+            else {
+                return;
+            };
+            if !afterwards.fell_away(self.second_looks.params()) {
+                continue;
+            }
+            let Waiting {
+                time_sample,
+                pattern,
+                strength,
+                score,
+            } = onset;
+            // What it spans is recognised sound, for the speech guard, and a copy of a
+            // take there has fired.
+            let after = self.second_looks.reach();
+            self.context
+                .stopped(time_sample, time_sample + after, false);
+            self.copies.fired(time_sample, pattern);
+            let event = self.decided(pattern, time_sample, strength, score);
+            if let Some(records) = &mut self.explain {
+                records.push(OnsetRecord {
+                    best: Some(event.pattern.clone()),
+                    best_score: Some(event.score),
+                    strength: Some(event.strength),
+                    window_seconds: Some(after as f64 / self.rate),
+                    ..OnsetRecord::unscored(event.time, event.emitted_at, Outcome::FellAway)
                 });
             }
             out.push(event);
@@ -2216,8 +2293,14 @@ impl SpectralMatcher {
     /// sample, level dB): those whose whole window lies in the `speech_guard_seconds`
     /// before it, up to 5 ms before it.
     fn guard_frames(&self, time_sample: u64) -> impl Iterator<Item = (u64, f32)> + '_ {
+        self.frames_before(time_sample, self.guard_samples())
+    }
+
+    /// The frames whose whole window lies in the `span` samples before the onset at
+    /// `time_sample`, up to 5 ms before it, as (centre sample, level dB).
+    fn frames_before(&self, time_sample: u64, span: u64) -> impl Iterator<Item = (u64, f32)> + '_ {
         let cap = self.frame_capacity as u64;
-        let from = time_sample.saturating_sub(self.guard_samples());
+        let from = time_sample.saturating_sub(span);
         let to = self.quiet_before_span(time_sample).1;
         self.frames_inside(from, to).map(move |f| {
             (
