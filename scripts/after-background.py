@@ -34,19 +34,12 @@ import sys
 import numpy as np
 import soundfile as sf
 
+from set_patterns import pattern_args
+
 VOICING_FROM = 0.025
 VOICING_TO = 0.075
 # Where each 25 ms window compared with the first begins, seconds after the onset.
 WINDOWS = (0.025, 0.05, 0.075, 0.1, 0.125)
-
-
-def pattern_args(folder):
-    kinds = json.load(open(os.path.join(folder, "set.json")))["kinds"]
-    args = []
-    for label, kind in kinds.items():
-        suffix = ":continuous" if kind == "continuous" else ""
-        args += ["--pattern", f"{label}=patterns/{label}.wav{suffix}"]
-    return args
 
 
 def after(x, sr, t):
@@ -75,7 +68,7 @@ def main():
     binary = os.path.abspath(sys.argv[1])
     rows = []
     for folder in sys.argv[2:]:
-        args = pattern_args(folder)
+        _, args = pattern_args(folder)
         for wav in sorted(glob.glob(os.path.join(folder, "seq_*.wav"))):
             x, sr = sf.read(wav, dtype="float64")
             if x.ndim > 1:

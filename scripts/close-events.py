@@ -23,14 +23,7 @@ import os
 import subprocess
 import sys
 
-
-def pattern_args(folder):
-    kinds = json.load(open(os.path.join(folder, "set.json")))["kinds"]
-    args = []
-    for label, kind in kinds.items():
-        suffix = ":continuous" if kind == "continuous" else ""
-        args += ["--pattern", f"{label}=patterns/{label}.wav{suffix}"]
-    return kinds, args
+from set_patterns import pattern_args
 
 
 def status(onset, truth):

@@ -22,14 +22,7 @@ import os
 import subprocess
 import sys
 
-
-def pattern_args(folder):
-    kinds = json.load(open(os.path.join(folder, "set.json")))["kinds"]
-    args = []
-    for label, kind in kinds.items():
-        suffix = ":continuous" if kind == "continuous" else ""
-        args += ["--pattern", f"{label}=patterns/{label}.wav{suffix}"]
-    return args
+from set_patterns import pattern_args
 
 
 def main():
@@ -37,7 +30,7 @@ def main():
         sys.exit(__doc__)
     binary = os.path.abspath(sys.argv[1])
     for folder in sys.argv[2:]:
-        args = pattern_args(folder)
+        _, args = pattern_args(folder)
         cells = []
         for wav in sorted(glob.glob(os.path.join(folder, "seq_*.wav"))):
             truth = [float(r["onset_s"]) for r in csv.DictReader(open(wav[:-4] + ".csv"))]

@@ -133,7 +133,7 @@ fn pitch_from_correlations(by_lag: &[f64], min_lag: u64, rate: f64) -> Option<f6
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     const RATE: f64 = 22_050.0;
@@ -147,6 +147,19 @@ mod tests {
                     .map(|k| (2.0 * std::f64::consts::PI * f0 * k as f64 * t).sin() / k as f64)
                     .sum::<f64>() as f32
                     * 0.3
+            })
+            .collect()
+    }
+
+    /// `n` samples of uniform white noise (a linear congruential generator from `seed`).
+    pub(in crate::detect) fn noise(n: usize, seed: u64) -> Vec<f32> {
+        let mut state = seed;
+        (0..n)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
             })
             .collect()
     }
@@ -173,15 +186,7 @@ mod tests {
             let v = pitch.voicing(0, n as u64, |k| x[k as usize]);
             assert!(v >= VOICED_CORRELATION, "{f0} Hz: {v}");
         }
-        let mut state = 7u64;
-        let noise: Vec<f32> = (0..n)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
-            })
-            .collect();
+        let noise = noise(n, 7);
         let v = pitch.voicing(0, n as u64, |k| noise[k as usize]);
         assert!(v < 0.3, "noise: {v}");
         // Shorter than one of the longest periods (60 Hz) and the lag itself.
@@ -190,15 +195,7 @@ mod tests {
 
     #[test]
     fn noise_and_a_short_span_give_none() {
-        let mut state = 1u64;
-        let noise: Vec<f32> = (0..(0.3 * RATE) as usize)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
-            })
-            .collect();
+        let noise = noise((0.3 * RATE) as usize, 1);
         assert_eq!(estimate(&noise), None);
         // Shorter than two of the longest periods (60 Hz).
         assert_eq!(estimate(&buzz(150.0, 0.02)), None);

@@ -167,21 +167,10 @@ impl SecondLooks {
 
 #[cfg(test)]
 mod tests {
+    use super::super::pitch::tests::noise;
     use super::*;
 
     const RATE: f64 = 22_050.0;
-
-    fn noise(n: usize, seed: u64) -> Vec<f32> {
-        let mut state = seed;
-        (0..n)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 40) as f32 / (1u64 << 24) as f32) - 0.5
-            })
-            .collect()
-    }
 
     fn measure(x: &[f32]) -> Afterwards {
         let mut pitch = PitchEstimator::new(RATE);
