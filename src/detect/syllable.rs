@@ -4,8 +4,8 @@
 //! is voiced, and as loud as its consonant or louder. A hit (a hi-hat, a snare, a
 //! click) is no syllable: its sound falls away, unvoiced. So an onset that its pattern
 //! named but that lay nearer the background's speech than its take, and whose sound
-//! `after_seconds` on has fallen `fall_db` under its decision window without turning
-//! voiced, fires its pattern then, dated at its onset (outcome `fell_away`). Owns the
+//! `after_windows` decision windows on has fallen `fall_db` under its first window
+//! without turning voiced, fires its pattern then, dated at its onset (outcome `fell_away`). Owns the
 //! onsets waiting for that look; the measure is [`Afterwards`], a pure function of the
 //! samples. Runs on the detector thread, inside the spectral matcher
 //! ([`super::spectral`]); allocates nothing after `new`.
@@ -16,10 +16,11 @@ use super::pitch::{PitchEstimator, VOICED_CORRELATION};
 /// on").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct SyllableParams {
-    /// How long after its onset a sound is looked at again: three decision windows, by
-    /// when a syllable's consonant has run into its vowel. Swept 50-100 ms over every
-    /// dev set: from 75 ms on alike; at 50 ms a hit has not yet fallen away.
-    pub after_seconds: f64,
+    /// How many decision windows after its onset a sound is looked at again (75 ms at
+    /// the default 25 ms), by when a syllable's consonant has run into its vowel. Swept
+    /// 2-4 windows over every dev set: from 3 on alike; after 2 a hit has not yet fallen
+    /// away.
+    pub after_windows: u64,
     /// How far (dB) its last decision window's power must lie under its first: swept
     /// 8-18 dB, the hits found alike from 8 to 12, the speech passing less the more is
     /// asked; 12 dB, a sixteenth of the power.
@@ -29,7 +30,7 @@ pub(super) struct SyllableParams {
 impl Default for SyllableParams {
     fn default() -> Self {
         Self {
-            after_seconds: 0.075,
+            after_windows: 3,
             fall_db: 12.0,
         }
     }
@@ -38,8 +39,8 @@ impl Default for SyllableParams {
 /// What the sound did after its onset.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Afterwards {
-    /// The power of the last decision window before `after_seconds` against the first
-    /// one's, dB.
+    /// The power of the last decision window before the look against the first one's,
+    /// dB.
     pub fall_db: f64,
     /// How voiced the sound between the two windows is ([`PitchEstimator::voicing`]).
     pub voicing: f64,
@@ -84,13 +85,15 @@ pub(super) struct Waiting {
     pub score: f32,
 }
 
-/// Onsets waiting (at least 20 ms apart, for `after_seconds`): a handful would do.
+/// Onsets waiting (at least 20 ms apart, for `after_windows` windows): a handful would
+/// do.
 const WAITING: usize = 16;
 
 /// The onsets waiting for their second look, oldest first.
 pub(super) struct SecondLooks {
     params: SyllableParams,
-    /// `after_seconds` and a decision window, samples.
+    /// How long after its onset a sound is looked at again, and a decision window,
+    /// samples.
     after: u64,
     window: u64,
     waiting: [Waiting; WAITING],
@@ -108,10 +111,11 @@ impl SecondLooks {
             strength: 0.0,
             score: 0.0,
         };
+        let window = (window_seconds * rate).round() as u64;
         Self {
             params,
-            after: (params.after_seconds * rate).round() as u64,
-            window: (window_seconds * rate).round() as u64,
+            after: params.after_windows * window,
+            window,
             waiting: [none; WAITING],
             first: 0,
             len: 0,
