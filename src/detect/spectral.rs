@@ -60,6 +60,11 @@
 //! 0.25 s of its sound is in, by its waveform against each impulse take; a copy of a
 //! take fires its pattern then ([`super::copies`]; outcome `copy`).
 //!
+//! A second look: an impulse that the background took for speech, heard clear of talk
+//! and not over a fired word, is heard again three decision windows on; where its
+//! sound fell away unvoiced, as a hit's does and a syllable's does not, it fires then
+//! ([`super::syllable`]; outcome `fell_away`).
+//!
 //! Speech guard: an onset is ignored when the `speech_guard_seconds` before it held
 //! 200 ms of sound within 10 dB of its peak that no pattern recognised (a consonant
 //! inside a sentence follows its words; a missed hit is shorter): the context stage

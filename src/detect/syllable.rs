@@ -5,10 +5,10 @@
 //! click) is no syllable: its sound falls away, unvoiced. So an onset that its pattern
 //! named but that lay nearer the background's speech than its take, and whose sound
 //! `after_windows` decision windows on has fallen `fall_db` under its first window
-//! without turning voiced, fires its pattern then, dated at its onset (outcome `fell_away`). Owns the
-//! onsets waiting for that look; the measure is [`Afterwards`], a pure function of the
-//! samples. Runs on the detector thread, inside the spectral matcher
-//! ([`super::spectral`]); allocates nothing after `new`.
+//! without turning voiced, fires its pattern then, dated at its onset (outcome
+//! `fell_away`). Owns the onsets waiting for that look; the measure is [`Afterwards`],
+//! a pure function of the samples. Runs on the detector thread, inside the spectral
+//! matcher ([`super::spectral`]); allocates nothing after `new`.
 
 use super::pitch::{PitchEstimator, VOICED_CORRELATION};
 
