@@ -16,6 +16,7 @@ mod enrol;
 mod envelope;
 mod explain;
 mod features;
+mod fifo;
 pub mod gates;
 mod held;
 mod levels;

@@ -9,9 +9,11 @@
 //! It knows nothing of patterns or of what became of an onset, so its placements do
 //! not depend on any decision. The same stage places a stream's onsets (inside the
 //! spectral matcher, on the detector thread) and an enrolled take's
-//! ([`super::enrol::take_onsets`], on the thread that builds the detector, without the
+//! ([`super::enrol::take_placements`], on the thread that builds the detector, without the
 //! condition on the room's noise): a take's onset lies where a stream in a quiet room
 //! would place it. Allocates nothing after `new`.
+
+use super::fifo::Fifo;
 
 /// An onset is placed on the samples this many frames after its detection, once the
 /// attack has arrived. Waiting longer lets the loudest so far come nearer the sound's
@@ -41,39 +43,28 @@ const WAITING: usize = 8;
 /// Onsets waiting to be placed, oldest first.
 pub(super) struct Placer {
     hop: u64,
-    /// Frames at which the waiting onsets were detected, a ring of `WAITING`.
-    detected: [u64; WAITING],
-    first: usize,
-    len: usize,
-    /// Detections that found the queue full (none on any input so far: detections are
-    /// at least `min_gap_seconds` apart and wait 3 frames).
-    dropped: u64,
+    /// Frames at which the waiting onsets were detected. Detections that found the
+    /// queue full are counted there (none on any input so far: detections are at least
+    /// `min_gap_seconds` apart and wait 3 frames).
+    detected: Fifo<u64, WAITING>,
 }
 
 impl Placer {
     pub(super) fn new(hop: usize) -> Self {
         Self {
             hop: hop.max(1) as u64,
-            detected: [0; WAITING],
-            first: 0,
-            len: 0,
-            dropped: 0,
+            detected: Fifo::new(),
         }
     }
 
     /// The onset stage detected an onset at frame `frame`.
     pub(super) fn detected(&mut self, frame: u64) {
-        if self.len == WAITING {
-            self.dropped += 1;
-            return;
-        }
-        self.detected[(self.first + self.len) % WAITING] = frame;
-        self.len += 1;
+        self.detected.push(frame);
     }
 
     /// Detections the queue had no room for.
     pub(super) fn dropped(&self) -> u64 {
-        self.dropped
+        self.detected.dropped()
     }
 
     /// The next onset whose placement is due, once `frames` frames have been computed
@@ -88,15 +79,11 @@ impl Placer {
         noise_power: f64,
         sample: impl Fn(u64) -> f32,
     ) -> Option<u64> {
-        if self.len == 0 {
-            return None;
-        }
-        let detected = self.detected[self.first];
+        let detected = self.detected.front()?;
         if frames <= detected + PLACE_AFTER_FRAMES {
             return None;
         }
-        self.first = (self.first + 1) % WAITING;
-        self.len -= 1;
+        self.detected.pop();
         // Two frames before the detection: the frame whose window first held the attack.
         let from = (detected.saturating_sub(2) * self.hop).max(oldest);
         let block = (self.hop / 2).max(1);

@@ -10,6 +10,7 @@
 //! a pure function of the samples. Runs on the detector thread, inside the spectral
 //! matcher ([`super::spectral`]); allocates nothing after `new`.
 
+use super::fifo::Fifo;
 use super::pitch::{PitchEstimator, VOICED_CORRELATION};
 
 /// The stage's settings (`docs/background.md`, "A second look, once the sound has gone
@@ -77,7 +78,7 @@ impl Afterwards {
 }
 
 /// An onset waiting for its second look: its pattern as its first window named it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(super) struct Waiting {
     pub time_sample: u64,
     pub pattern: usize,
@@ -96,30 +97,17 @@ pub(super) struct SecondLooks {
     /// samples.
     after: u64,
     window: u64,
-    waiting: [Waiting; WAITING],
-    first: usize,
-    len: usize,
-    /// Onsets that found the queue full.
-    dropped: u64,
+    waiting: Fifo<Waiting, WAITING>,
 }
 
 impl SecondLooks {
     pub(super) fn new(params: SyllableParams, rate: f64, window_seconds: f64) -> Self {
-        let none = Waiting {
-            time_sample: 0,
-            pattern: 0,
-            strength: 0.0,
-            score: 0.0,
-        };
         let window = (window_seconds * rate).round() as u64;
         Self {
             params,
             after: params.after_windows * window,
             window,
-            waiting: [none; WAITING],
-            first: 0,
-            len: 0,
-            dropped: 0,
+            waiting: Fifo::new(),
         }
     }
 
@@ -130,16 +118,12 @@ impl SecondLooks {
 
     /// The background took `onset` for speech.
     pub(super) fn wait(&mut self, onset: Waiting) {
-        if self.len == WAITING {
-            self.dropped += 1;
-            return;
-        }
-        self.waiting[(self.first + self.len) % WAITING] = onset;
-        self.len += 1;
+        self.waiting.push(onset);
     }
 
+    /// Onsets that found the queue full.
     pub(super) fn dropped(&self) -> u64 {
-        self.dropped
+        self.waiting.dropped()
     }
 
     /// The oldest onset whose look is due once `consumed` samples are in, with what its
@@ -150,15 +134,11 @@ impl SecondLooks {
         pitch: &mut PitchEstimator,
         sample: impl Fn(u64) -> f32,
     ) -> Option<(Waiting, Afterwards)> {
-        if self.len == 0 {
-            return None;
-        }
-        let onset = self.waiting[self.first];
+        let onset = self.waiting.front()?;
         if consumed < onset.time_sample + self.after {
             return None;
         }
-        self.first = (self.first + 1) % WAITING;
-        self.len -= 1;
+        self.waiting.pop();
         let afterwards =
             Afterwards::measure(onset.time_sample, self.window, self.after, pitch, sample);
         Some((onset, afterwards))
