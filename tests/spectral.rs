@@ -1242,6 +1242,19 @@ fn ticked_snare(lead: f64, seed: u64) -> Vec<f32> {
     s
 }
 
+/// Asserts that no two of `events` lie closer than `seconds`, saying `why` and which two
+/// when some do.
+fn assert_events_apart(events: &[Event], seconds: f64, why: &str) {
+    for pair in events.windows(2) {
+        assert!(
+            pair[1].time - pair[0].time >= seconds,
+            "{why}: {:?} and {:?}",
+            (pair[0].time, &pair[0].pattern),
+            (pair[1].time, &pair[1].pattern)
+        );
+    }
+}
+
 /// Two detections 20 ms apart can be placed on one attack (the first late in its
 /// search for the loudest part, the second early in its own): each sound is still one
 /// event, whatever the tick before its body.
@@ -1270,14 +1283,7 @@ fn a_hit_is_one_event_whatever_comes_just_before_its_body() {
     add_noise(&mut rec, 0.001, 3);
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 256);
-    for pair in events.windows(2) {
-        assert!(
-            pair[1].time - pair[0].time >= 0.02,
-            "two events on one attack: {:?} and {:?}",
-            (pair[0].time, &pair[0].pattern),
-            (pair[1].time, &pair[1].pattern)
-        );
-    }
+    assert_events_apart(&events, 0.02, "two events on one attack");
     let s = score(&events, &truth, 0.05);
     assert!(s.overall.f1 >= 0.95, "{}", onomato::eval::render_text(&s));
 }
@@ -1588,14 +1594,11 @@ fn a_hiss_that_swells_before_its_attack_is_one_event() {
     }
     add_noise(&mut rec, 0.0005, 42);
     let (events, outcomes) = detect_explained(enrol(&settings), &settings, &rec);
-    for pair in events.windows(2) {
-        assert!(
-            pair[1].time - pair[0].time >= 0.05,
-            "one hiss, two events: {:?} and {:?}; onsets considered: {outcomes:?}",
-            (pair[0].time, &pair[0].pattern),
-            (pair[1].time, &pair[1].pattern)
-        );
-    }
+    assert_events_apart(
+        &events,
+        0.05,
+        &format!("one hiss, two events (onsets considered: {outcomes:?})"),
+    );
     let s = score(&events, &truth, 0.05);
     assert!(
         s.overall.f1 >= 0.95,
