@@ -927,20 +927,13 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
         .unwrap(),
         Pattern::from_samples("pop", PatternKind::Impulse, vec![pop.clone()], &settings).unwrap(),
     ];
-    let mut rng = Rng::new(32);
-    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
-    let mut truth = Vec::new();
-    for _ in 0..40 {
-        let (label, sound) = if rng.unit() < 0.5 {
-            ("click", &click)
+    let (rec, truth) = drawn_sequence(32, 40, -9.0, (0.15, 0.6), 33, |rng| {
+        if rng.unit() < 0.5 {
+            ("click", click.clone())
         } else {
-            ("pop", &pop)
-        };
-        let gain = 10f64.powf(rng.range(-9.0, 0.0) / 20.0) as f32;
-        let sound: Vec<f32> = sound.iter().map(|v| v * gain).collect();
-        append_impulse(&mut rec, &mut truth, label, &sound, rng.range(0.15, 0.6));
-    }
-    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 33);
+            ("pop", pop.clone())
+        }
+    });
     let clicks = truth.iter().filter(|t| t.label == "click").count();
     assert!(clicks >= 10, "{clicks} clicks");
     let (events, outcomes) = detect_explained(patterns, &settings, &rec);
@@ -950,6 +943,37 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
         "{}; onsets considered: {outcomes:?}",
         onomato::eval::render_text(&s)
     );
+}
+
+/// `count` sounds, each drawn by `draw` (its label and samples) from a generator seeded
+/// with `seed`, at a gain of `lowest_db`..0 dB and followed by `quiet` seconds of silence,
+/// after 0.4 s of it, in noise 60 dB under full scale (seeded with `noise_seed`): the
+/// recording and its truth.
+fn drawn_sequence(
+    seed: u64,
+    count: usize,
+    lowest_db: f64,
+    quiet: (f64, f64),
+    noise_seed: u64,
+    mut draw: impl FnMut(&mut Rng) -> (&'static str, Vec<f32>),
+) -> (Vec<f32>, Vec<Annotation>) {
+    let mut rng = Rng::new(seed);
+    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
+    let mut truth = Vec::new();
+    for _ in 0..count {
+        let (label, sound) = draw(&mut rng);
+        let gain = 10f64.powf(rng.range(lowest_db, 0.0) / 20.0) as f32;
+        let sound: Vec<f32> = sound.iter().map(|v| v * gain).collect();
+        append_impulse(
+            &mut rec,
+            &mut truth,
+            label,
+            &sound,
+            rng.range(quiet.0, quiet.1),
+        );
+    }
+    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), noise_seed);
+    (rec, truth)
 }
 
 /// Clicks (noise dying 50 dB away within 4.6 ms) `1 / per_second` apart, `clicks` of
@@ -988,22 +1012,15 @@ fn chatters_found(
         Pattern::from_samples("chatter", PatternKind::Impulse, takes, &settings).unwrap(),
         Pattern::from_samples("pop", PatternKind::Impulse, vec![pop.clone()], &settings).unwrap(),
     ];
-    let mut rng = Rng::new(42);
-    let mut rec = vec![0.0f32; samples_for(0.4, RATE)];
-    let mut truth = Vec::new();
-    for _ in 0..30 {
-        let (label, sound) = if rng.unit() < 0.5 {
+    let (rec, truth) = drawn_sequence(42, 30, -6.0, (0.3, 0.6), 43, |rng| {
+        if rng.unit() < 0.5 {
             let clicks = 6 + (rng.unit() * 4.0) as usize;
             let pace = rng.range(per_second.0, per_second.1);
             ("chatter", chatter(&click, clicks, pace))
         } else {
             ("pop", pop.clone())
-        };
-        let gain = 10f64.powf(rng.range(-6.0, 0.0) / 20.0) as f32;
-        let sound: Vec<f32> = sound.iter().map(|v| v * gain).collect();
-        append_impulse(&mut rec, &mut truth, label, &sound, rng.range(0.3, 0.6));
-    }
-    add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 43);
+        }
+    });
     let chatters = truth.iter().filter(|t| t.label == "chatter").count();
     assert!(chatters >= 8, "{chatters} chatters");
     let (events, _) = detect_explained(patterns, &settings, &rec);
