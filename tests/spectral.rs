@@ -863,6 +863,22 @@ fn a_faint_click_just_before_a_hit_does_not_hide_the_hit() {
     }
 }
 
+/// Asserts that `events` score an F1 of `at_least` against `truth` (onsets within 50
+/// ms), saying how many onsets each gate decided (`outcomes`) when they do not.
+fn assert_f1_at_least(
+    events: &[Event],
+    truth: &[Annotation],
+    at_least: f64,
+    outcomes: &std::collections::BTreeMap<&'static str, usize>,
+) {
+    let s = score(events, truth, 0.05);
+    assert!(
+        s.overall.f1 >= at_least,
+        "{}; onsets considered: {outcomes:?}",
+        onomato::eval::render_text(&s)
+    );
+}
+
 /// The events of `patterns` on `rec`, and how many onsets each gate decided (for a
 /// failing test's message).
 fn detect_explained(
@@ -937,12 +953,7 @@ fn a_click_of_4_ms_enrols_and_each_one_is_found() {
     let clicks = truth.iter().filter(|t| t.label == "click").count();
     assert!(clicks >= 10, "{clicks} clicks");
     let (events, outcomes) = detect_explained(patterns, &settings, &rec);
-    let s = score(&events, &truth, 0.05);
-    assert!(
-        s.overall.f1 >= 0.99,
-        "{}; onsets considered: {outcomes:?}",
-        onomato::eval::render_text(&s)
-    );
+    assert_f1_at_least(&events, &truth, 0.99, &outcomes);
 }
 
 /// `count` sounds, each drawn by `draw` (its label and samples) from a generator seeded
@@ -1098,12 +1109,7 @@ fn a_sound_right_after_a_chatter_is_not_taken_for_it() {
     }
     add_noise(&mut rec, 0.5 * 10f64.powf(-60.0 / 20.0), 46);
     let (events, outcomes) = detect_explained(patterns, &settings, &rec);
-    let s = score(&events, &truth, 0.05);
-    assert!(
-        s.overall.f1 >= 0.99,
-        "{}; onsets considered: {outcomes:?}",
-        onomato::eval::render_text(&s)
-    );
+    assert_f1_at_least(&events, &truth, 0.99, &outcomes);
 }
 
 /// Brown noise (white noise through a leaky integrator) of RMS `rms`, added to `rec`:
@@ -1131,12 +1137,7 @@ fn hits_over_rumble_under_the_bands_are_each_found() {
     let rms = (rec.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>() / rec.len() as f64).sqrt();
     add_rumble(&mut rec, rms, 12);
     let (events, outcomes) = detect_explained(enrol(&settings), &settings, &rec);
-    let s = score(&events, &truth, 0.05);
-    assert!(
-        s.overall.f1 >= 0.95,
-        "{}; onsets considered: {outcomes:?}",
-        onomato::eval::render_text(&s)
-    );
+    assert_f1_at_least(&events, &truth, 0.95, &outcomes);
 }
 
 /// A mains buzz of `hz` (50 or 60 Hz: a ground loop, a lamp's dimmer), added to `rec`:
@@ -1616,12 +1617,7 @@ fn a_hiss_that_swells_before_its_attack_is_one_event() {
         0.05,
         &format!("one hiss, two events (onsets considered: {outcomes:?})"),
     );
-    let s = score(&events, &truth, 0.05);
-    assert!(
-        s.overall.f1 >= 0.95,
-        "{}; onsets considered: {outcomes:?}",
-        onomato::eval::render_text(&s)
-    );
+    assert_f1_at_least(&events, &truth, 0.95, &outcomes);
 }
 
 /// Noise brightened once (6 dB an octave), `seconds` long, under a decay of `decay`
