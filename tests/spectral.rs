@@ -1708,3 +1708,35 @@ fn a_hit_the_background_took_for_speech_fires_once_it_fell_away_and_a_syllable_d
     }
     assert_eq!(events.len(), hits.len(), "{events:?}");
 }
+
+/// A pure tone with nothing under it (synthesised at a float sample format: no input
+/// noise, no dither) is one onset, where it begins. The bands far from it hold only the
+/// rounding of the analysis, 120 dB and more under the tone, which wanders with the
+/// tone's phase; taken as sound, it gave an onset every 50 ms for as long as the tone
+/// lasted.
+#[test]
+fn a_pure_tone_with_nothing_under_it_is_one_onset() {
+    use onomato::detect::onset::OnsetParams;
+    use onomato::detect::spectral::onset_times;
+    let rate = 22_050.0;
+    for amplitude in [0.9f32, 0.5] {
+        let mut tone = vec![0.0f32; (0.3 * rate) as usize];
+        tone.extend((0..(2.0 * rate) as usize).map(|n| {
+            amplitude * (2.0 * std::f64::consts::PI * 440.0 * n as f64 / rate).sin() as f32
+        }));
+        // The tone ends into silence: an onset at its cut is the cut's own click.
+        let during: Vec<f64> = onset_times(&tone, rate, OnsetParams::default())
+            .into_iter()
+            .filter(|&t| t < 2.25)
+            .collect();
+        assert_eq!(
+            during.len(),
+            1,
+            "amplitude {amplitude}: onsets at {during:?}"
+        );
+        assert!(
+            (during[0] - 0.3).abs() < 0.02,
+            "amplitude {amplitude}: {during:?}"
+        );
+    }
+}

@@ -96,6 +96,37 @@ impl Default for OnsetParams {
 /// of 16-bit audio).
 const MIN_BAND_POWER: f32 = 1e-10;
 
+/// How far under a frame's loudest band a band can hold anything, dB: 16-bit audio
+/// spans 96 dB. Under about 120 dB a band holds the rounding of the f32 analysis
+/// (resampling, window, transform) of what is in the loudest one, which wanders with
+/// the phase of a pure tone and, where no input noise covers it (a tone synthesised at
+/// a float sample format), rises by more than the onset threshold a few times a second.
+const ANALYSIS_RANGE_DB: f32 = 100.0;
+
+/// The least power a band of a frame whose loudest band holds `loudest` is taken to
+/// hold: `MIN_BAND_POWER`, or `ANALYSIS_RANGE_DB` under the loudest.
+fn least_band_power(loudest: f32) -> f32 {
+    MIN_BAND_POWER.max(loudest * 10f32.powf(-ANALYSIS_RANGE_DB / 10.0))
+}
+
+/// A band's power as the onset stage takes it: at least [`least_band_power`] of its
+/// frame's loudest band (`least`); a value that is not a number holds nothing.
+fn band_power(p: f32, least: f32) -> f32 {
+    if p.is_finite() {
+        p.max(least)
+    } else {
+        MIN_BAND_POWER
+    }
+}
+
+/// The loudest finite band power of a frame.
+fn loudest_band(power: &[f32]) -> f32 {
+    power
+        .iter()
+        .filter(|p| p.is_finite())
+        .fold(0.0f32, |m, &p| m.max(p))
+}
+
 /// Whether a frame's band powers hold any sound at all. A frame that holds none is
 /// digital silence (samples that are all zero, or were not numbers, made zero): no
 /// room is that quiet.
@@ -235,12 +266,8 @@ impl OnsetDetector {
             return;
         }
         let power = |f: usize, b: usize| {
-            let p = powers[f * bands + b];
-            if p.is_finite() {
-                p.max(MIN_BAND_POWER)
-            } else {
-                MIN_BAND_POWER
-            }
+            let frame = &powers[f * bands..(f + 1) * bands];
+            band_power(frame[b], least_band_power(loudest_band(frame)))
         };
         for b in 0..bands {
             let fl = (0..frames - 1).rev().fold(power(frames - 1, b), |fl, f| {
@@ -282,12 +309,9 @@ impl OnsetDetector {
         let sound = holds_sound(&power[..bands.min(power.len())]);
         let resumed = std::mem::replace(&mut self.after_silence, !sound) && sound;
         let catch_up = 1.0 / self.floor_fall;
+        let least = least_band_power(loudest_band(&power[..bands.min(power.len())]));
         for (b, &p) in power.iter().enumerate().take(bands) {
-            let p = if p.is_finite() {
-                p.max(MIN_BAND_POWER)
-            } else {
-                MIN_BAND_POWER
-            };
+            let p = band_power(p, least);
             let fl = &mut self.floor[b];
             let catching = &mut self.catching_up[b];
             if f == 0 && !self.primed {
