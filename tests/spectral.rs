@@ -1707,6 +1707,26 @@ fn a_hit_the_background_took_for_speech_fires_once_it_fell_away_and_a_syllable_d
         );
     }
     assert_eq!(events.len(), hits.len(), "{events:?}");
+
+    // The same hits, each under `min_strength` of its take: too faint to be the user's,
+    // they do not fire on the second look either (before, the look fired them whatever
+    // their strength).
+    let strongest = records
+        .iter()
+        .filter(|r| {
+            r.outcome.as_str() == "background" && hits.iter().any(|&t| (r.time - t).abs() < 0.01)
+        })
+        .filter_map(|r| r.strength)
+        .fold(0.0f64, f64::max);
+    assert!(strongest > 0.0, "{records:?}");
+    let faint = DetectorSettings {
+        min_strength: 1.5 * strongest,
+        ..settings
+    };
+    let patterns = vec![impulse("ts", brighten(&hat(1)), &faint)];
+    let mut det = Detector::new(patterns, &faint, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert!(events.is_empty(), "{events:?}");
 }
 
 /// A pure tone with nothing under it (synthesised at a float sample format: no input

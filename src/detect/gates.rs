@@ -177,7 +177,16 @@ pub fn decide(e: &Evidence, params: &GateParams) -> Outcome {
         Outcome::BelowThreshold
     } else if e.like_speech(params) && !over_tail {
         Outcome::Background
-    } else if e.held_by_best_pattern {
+    } else {
+        after_background(e, params)
+    }
+}
+
+/// What the gates after the background decide of an onset: those an onset the
+/// background took for speech must still pass if it is to fire later (the syllable
+/// stage's second look).
+pub fn after_background(e: &Evidence, params: &GateParams) -> Outcome {
+    if e.held_by_best_pattern {
         Outcome::HeldContinues
     } else if e.strength < params.min_strength {
         Outcome::MinStrength
@@ -210,6 +219,30 @@ mod tests {
     #[test]
     fn an_onset_no_gate_stops_fires() {
         assert_eq!(decide(&clear(), &GateParams::default()), Outcome::Fired);
+    }
+
+    /// An onset the background took for speech is judged by the gates after it as
+    /// `decide` would have judged it without the background.
+    #[test]
+    fn the_gates_after_the_background_judge_a_sound_it_took_as_without_it() {
+        let p = GateParams::default();
+        let speech = Evidence {
+            background_score: 0.95,
+            ..clear()
+        };
+        assert_eq!(decide(&speech, &p), Outcome::Background);
+        assert_eq!(after_background(&speech, &p), Outcome::Fired);
+        let faint = Evidence {
+            strength: p.min_strength * 0.5,
+            ..speech
+        };
+        assert_eq!(decide(&faint, &p), Outcome::Background);
+        assert_eq!(after_background(&faint, &p), Outcome::MinStrength);
+        let held = Evidence {
+            held_by_best_pattern: true,
+            ..speech
+        };
+        assert_eq!(after_background(&held, &p), Outcome::HeldContinues);
     }
 
     #[test]

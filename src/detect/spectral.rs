@@ -97,7 +97,7 @@ use super::features::{
     features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity, top_hz,
     Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
-use super::gates::{decide, Evidence, GateParams, Outcome};
+use super::gates::{after_background, decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
 use super::levels::{sound_level_db, LevelInput, Levels, StreamStart, SILENT_DB};
 use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
@@ -1407,11 +1407,14 @@ impl SpectralMatcher {
             self.record(&decision);
         }
         self.cover_stopped(&decision);
-        // Over a fired word's tail the sound after the onset is partly that word's; after
-        // talk, a word's last consonant falls away unvoiced too. What counts as talk is
+        // A second look fires what the background took, so it must pass the gates after
+        // the background (a sound too faint to be the user's is not, however it falls
+        // away). Over a fired word's tail the sound after the onset is partly that
+        // word's; after talk, a word's last consonant falls away unvoiced too. What counts as talk is
         // what the speech guard counts over its usual span, whatever it is set to: the
         // user who turns it off wants hits right after talking found, not talk.
         if outcome == Outcome::Background
+            && after_background(&decision.evidence, &self.gates) == Outcome::Fired
             && self.patterns[decision.pattern].kind == PatternKind::Impulse
             && !decision.evidence.over_fired_impulse
             && self.clear_of_talk_as_usual(time_sample, decision.peak)
