@@ -1410,9 +1410,10 @@ impl SpectralMatcher {
         // A second look fires what the background took, so it must pass the gates after
         // the background (a sound too faint to be the user's is not, however it falls
         // away). Over a fired word's tail the sound after the onset is partly that
-        // word's; after talk, a word's last consonant falls away unvoiced too. What counts as talk is
-        // what the speech guard counts over its usual span, whatever it is set to: the
-        // user who turns it off wants hits right after talking found, not talk.
+        // word's; after talk, a word's last consonant falls away unvoiced too. What
+        // counts as talk is what the speech guard counts over its usual span, whatever
+        // it is set to: the user who turns it off wants hits right after talking found,
+        // not talk.
         if outcome == Outcome::Background
             && after_background(&decision.evidence, &self.gates) == Outcome::Fired
             && self.patterns[decision.pattern].kind == PatternKind::Impulse
