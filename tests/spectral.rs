@@ -804,6 +804,53 @@ fn a_sound_heard_amid_unrecognised_sound_teaches_tracking_nothing() {
     }
 }
 
+/// What a pattern learns from an instance is taken back when talk follows it. The same
+/// drifting "pew" as above, each out of silence (clear of talk before it, as the first
+/// syllable of an utterance is) and followed at once by 0.3 s of a sung vowel (none of
+/// the patterns), as a syllable is by the rest of its word: each fires while its take
+/// still recognises it, and what it taught tracking is taken back once the vowel is
+/// heard, so the "pew"s that only tracking could follow are not found. Before, such
+/// syllables moved the template to speech a step at a time, and over a long stream of
+/// real speech a pattern fired more and more often on it (`scripts/long-run.py`).
+#[test]
+fn a_sound_followed_by_talk_teaches_tracking_nothing_in_the_end() {
+    let settings = spectral();
+    let patterns = pew_kick_and_hat(&settings);
+    let mut rec = vec![0.0f32; samples_for(0.3, RATE)];
+    let mut pews = Vec::new();
+    for factor in drifting_pitches() {
+        pews.push((rec.len() as f64 / f64::from(RATE), factor));
+        rec.extend(pew(factor));
+        rec.extend(buzz(RATE, 0.3, 320.0).iter().map(|v| v * 0.8));
+        rec.extend(vec![0.0; samples_for(0.8, RATE)]);
+    }
+    add_noise(&mut rec, 0.0005, 19);
+    let mut det = Detector::new(patterns, &settings, RATE).unwrap();
+    det.enable_explain();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    let records = det.take_explain().unwrap();
+    let found = |at: f64| {
+        events
+            .iter()
+            .any(|e| &*e.pattern == "pew" && (e.time - at).abs() < 0.05)
+    };
+    for &(at, factor) in pews.iter().filter(|(_, f)| *f < 1.1) {
+        assert!(found(at), "the pew {factor:.2} times as high: {events:#?}");
+    }
+    for &(at, factor) in pews.iter().filter(|(_, f)| *f > 1.8) {
+        assert!(!found(at), "the pew {factor:.2} times as high: {events:#?}");
+    }
+    // `--explain` says why: each one that fired taught nothing in the end.
+    let fired: Vec<_> = records
+        .iter()
+        .filter(|r| r.outcome == Outcome::Fired)
+        .collect();
+    assert!(!fired.is_empty());
+    for r in fired {
+        assert_eq!(r.taught.map(|t| t.as_str()), Some("no:talk-after"), "{r:?}");
+    }
+}
+
 /// The tracked template follows the way a sound was made last; the latest clear
 /// instances are kept as they were too. Here a "pew" (its pattern enrolled beside a
 /// "peew" half as high again) is said once a little low and once a little high, each

@@ -232,6 +232,7 @@ pub(super) struct FiredInstance<'a> {
 /// template and move it further, a rule feeding on its own decisions. Half the guard's
 /// sound is the middle of the plateau swept in `docs/classify.md` ("Tracking that
 /// learns only in the clear").
+#[derive(Clone)]
 pub(super) struct Tracked {
     params: TrackParams,
     features: usize,
@@ -258,6 +259,16 @@ impl Tracked {
             recent_held: vec![0; patterns],
             recent_next: vec![0; patterns],
         }
+    }
+
+    /// Becomes a copy of `other` (made for as many patterns and features), allocating
+    /// nothing.
+    pub(super) fn copy_from(&mut self, other: &Tracked) {
+        self.templates.copy_from_slice(&other.templates);
+        self.set.copy_from_slice(&other.set);
+        self.recent.copy_from_slice(&other.recent);
+        self.recent_held.copy_from_slice(&other.recent_held);
+        self.recent_next.copy_from_slice(&other.recent_next);
     }
 
     /// Forgets every tracked template and kept instance (the features they were made

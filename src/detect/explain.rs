@@ -172,6 +172,8 @@ pub enum Taught {
     Template,
     /// Nothing: it was heard amid talk.
     NothingAmidTalk,
+    /// Nothing in the end: talk followed it, and what it taught was taken back.
+    NothingTalkAfter,
     /// Nothing: it is not confident (its pattern's threshold plus the confidence, or
     /// another pattern, is as high).
     NothingUnsure,
@@ -180,12 +182,18 @@ pub enum Taught {
 }
 
 impl Taught {
+    /// Whether it moved the tracked template.
+    pub fn learnt(self) -> bool {
+        matches!(self, Self::TemplateAndKept | Self::Template)
+    }
+
     /// The name `--explain` prints.
     pub fn as_str(self) -> &'static str {
         match self {
             Self::TemplateAndKept => "both",
             Self::Template => "template",
             Self::NothingAmidTalk => "no:talk",
+            Self::NothingTalkAfter => "no:talk-after",
             Self::NothingUnsure => "no:unsure",
             Self::NothingFurtherThanTakes => "no:takes",
         }

@@ -45,6 +45,11 @@ impl<T: Copy + Default, const N: usize> Fifo<T, N> {
         Some(item)
     }
 
+    /// The items, oldest first, left in the queue.
+    pub(super) fn iter(&self) -> impl Iterator<Item = &T> + '_ {
+        (0..self.len).map(move |i| &self.items[(self.first + i) % N])
+    }
+
     /// Items that found the queue full.
     pub(super) fn dropped(&self) -> u64 {
         self.dropped

@@ -37,7 +37,8 @@
 //! heard in the onset's room, its noise added ([`super::classify`]), allowing a shift
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
 //! the voice as it drifts from the takes, and keeps its latest clear instances as they
-//! were ([`super::classify::Tracked`]). The best pattern wins if its score passes its
+//! were ([`super::classify::Tracked`]); what an instance taught is taken back if talk
+//! follows it (`SpectralMatcher::teach_due`). The best pattern wins if its score passes its
 //! threshold; below, the sound is none of the patterns and nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
 //! windows, up to `max_decision_seconds` (`Separating` in [`super::enrol`],
@@ -97,6 +98,7 @@ use super::features::{
     features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity, top_hz,
     Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
 };
+use super::fifo::Fifo;
 use super::gates::{after_background, decide, Evidence, GateParams, Outcome};
 use super::held::{Held, HeldParams, HeldStage};
 use super::levels::{sound_level_db, LevelInput, Levels, StreamStart, SILENT_DB};
@@ -465,6 +467,9 @@ pub struct SpectralMatcher {
     /// The impulses the background took for speech, waiting to be heard again once it is
     /// known whether their sound went on as a syllable's.
     second_looks: SecondLooks,
+    lessons: Fifo<Lesson, LESSONS>,
+    /// What tracking has learnt from the impulses whose after-span was clear of talk.
+    confirmed: Tracked,
 }
 
 /// Two patterns whose takes look alike over the decision window
@@ -499,6 +504,49 @@ impl PatternScore {
         take_score: f32::NEG_INFINITY,
     };
 }
+
+/// What an impulse that fired taught tracking, waiting to be kept until the speech
+/// guard's span after its take's sound is in ([`SpectralMatcher::teach_due`]).
+#[derive(Clone, Copy, Default)]
+struct Lesson {
+    pattern: usize,
+    time_sample: u64,
+    /// Where its take's sound ends, and its peak (dB) as the guard judges sound by.
+    end_sample: u64,
+    peak: f32,
+    features: [f32; FEATURES],
+    score: f32,
+    take_score: f32,
+    other: f32,
+    over_fired_impulse: bool,
+    /// Heard amid talk before it.
+    amid_talk: bool,
+}
+
+impl Lesson {
+    /// The instance as tracking is told of it.
+    fn instance<'a>(
+        &'a self,
+        patterns: &[PatternInfo],
+        takes_agree: &[TakesAgree],
+    ) -> FiredInstance<'a> {
+        FiredInstance {
+            features: &self.features,
+            score: self.score,
+            take_score: self.take_score,
+            other: self.other,
+            threshold: patterns[self.pattern].threshold,
+            takes_agree: takes_agree[self.pattern].score,
+            over_fired_impulse: self.over_fired_impulse,
+            amid_talk: self.amid_talk,
+        }
+    }
+}
+
+/// Lessons waiting, at most this many: a second and a half of impulses 20 ms apart
+/// (the onset stage's shortest gap) for a take of 0.85 s. One that finds the queue full
+/// is taught at once but never kept.
+const LESSONS: usize = 64;
 
 #[derive(Clone, Copy)]
 struct FiredImpulse {
@@ -841,6 +889,8 @@ impl SpectralMatcher {
             passband: Passband::new(rate),
             copies,
             second_looks,
+            lessons: Fifo::new(),
+            confirmed: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
         };
         let bands = matcher.analyzer.cepstrum.bands();
         // Whatever bands the stream leaves compared, no pair waits longer than this.
@@ -899,6 +949,8 @@ impl SpectralMatcher {
             .waits(&self.templates, &self.kinds, cepstrum, &mut self.separating);
         self.background.compare_on(&self.background_full, cepstrum);
         self.tracked.forget();
+        self.confirmed.forget();
+        while self.lessons.pop().is_some() {}
     }
 
     /// Adds `own` (made by [`background_model`] with this matcher's settings, from a
@@ -1222,6 +1274,7 @@ impl SpectralMatcher {
         self.decide_pending(out);
         self.check_copies(out);
         self.check_second_looks(out);
+        self.teach_due();
         self.follow_held(f, out);
         self.follow_stopped_held(f);
     }
@@ -1541,7 +1594,6 @@ impl SpectralMatcher {
         let Evidence {
             best_score,
             strength,
-            over_fired_impulse,
             ..
         } = d.evidence;
         let best_template = self.pattern_scores[pi].take;
@@ -1586,11 +1638,21 @@ impl SpectralMatcher {
             strength,
             last_attack_frame: onset_frame,
         });
-        let taught = (kind == PatternKind::Impulse).then(|| {
-            let taught = self.track(pi, over_fired_impulse, !d.clear_of_talk);
+        let taught = if kind == PatternKind::Impulse {
             self.copies.fired(time_sample, pi);
-            taught
-        });
+            // Taught at once, for the next onsets; kept once the sound after it shows
+            // it was not talk ([`Self::teach_due`]).
+            let lesson = self.lesson(pi, time_sample, time_sample + take_length, d);
+            let taught = self
+                .tracked
+                .follow(pi, &lesson.instance(&self.patterns, &self.takes_agree));
+            if taught.learnt() {
+                self.lessons.push(lesson);
+            }
+            Some(taught)
+        } else {
+            None
+        };
         out.push(decided);
         taught
     }
@@ -2053,7 +2115,9 @@ impl SpectralMatcher {
     /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail,
     /// `amid_talk` if it was not heard clear of talk ([`Context::guard`]). What it
     /// taught.
-    fn track(&mut self, pi: usize, over_fired_impulse: bool, amid_talk: bool) -> Taught {
+    /// What the impulse of pattern `pi` that fires at `time_sample`, its take's sound
+    /// ending at `end_sample`, will teach tracking once the sound after it is in.
+    fn lesson(&self, pi: usize, time_sample: u64, end_sample: u64, d: &Decision) -> Lesson {
         let other = self
             .pattern_scores
             .iter()
@@ -2061,17 +2125,59 @@ impl SpectralMatcher {
             .filter(|&(p, _)| p != pi)
             .map(|(_, s)| s.score)
             .fold(f32::NEG_INFINITY, f32::max);
-        let instance = FiredInstance {
-            features: &self.best_instance,
+        let mut features = [0.0f32; FEATURES];
+        features.copy_from_slice(&self.best_instance[..FEATURES]);
+        Lesson {
+            pattern: pi,
+            time_sample,
+            end_sample,
+            peak: d.peak,
+            features,
             score: self.pattern_scores[pi].score,
             take_score: self.pattern_scores[pi].take_score,
             other,
-            threshold: self.patterns[pi].threshold,
-            takes_agree: self.takes_agree[pi].score,
-            over_fired_impulse,
-            amid_talk,
-        };
-        self.tracked.follow(pi, &instance)
+            over_fired_impulse: d.evidence.over_fired_impulse,
+            amid_talk: !d.clear_of_talk,
+        }
+    }
+
+    /// Settles what each impulse that fired taught tracking once the speech guard's span
+    /// after its take's sound is in. Tracking learnt from it at once; heard clear of
+    /// talk after it as well as before, the lesson is kept (`confirmed`); otherwise
+    /// tracking becomes what the kept lessons and those still waiting taught. A
+    /// syllable that fires at the start of an utterance follows silence, as a hit does,
+    /// but the rest of its word follows it; a template moved to it finds the next
+    /// syllables, and those moved it further (`docs/classify.md`, "Tracking kept only
+    /// when no talk follows").
+    fn teach_due(&mut self) {
+        let span = self.guard_samples();
+        while let Some(lesson) = self.lessons.front() {
+            let due = lesson.end_sample + span;
+            if self.consumed < due {
+                return;
+            }
+            self.lessons.pop();
+            if self.guard(due, lesson.peak).clear_of_talk {
+                let instance = lesson.instance(&self.patterns, &self.takes_agree);
+                self.confirmed.follow(lesson.pattern, &instance);
+                continue;
+            }
+            self.tracked.copy_from(&self.confirmed);
+            for waiting in self.lessons.iter() {
+                let instance = waiting.instance(&self.patterns, &self.takes_agree);
+                self.tracked.follow(waiting.pattern, &instance);
+            }
+            if let Some(records) = &mut self.explain {
+                let time = lesson.time_sample as f64 / self.rate;
+                let fired = records
+                    .iter_mut()
+                    .rev()
+                    .find(|r| r.outcome == Outcome::Fired && r.time == time);
+                if let Some(record) = fired {
+                    record.taught = Some(Taught::NothingTalkAfter);
+                }
+            }
+        }
     }
 
     /// Energy of the samples (received so far) of the decision window from
