@@ -38,8 +38,8 @@
 //! of ±1 frame. Each impulse pattern also has a tracked template that follows
 //! the voice as it drifts from the takes, and keeps its latest clear instances as they
 //! were ([`super::classify::Tracked`]); what an instance taught is taken back if talk
-//! follows it (`SpectralMatcher::teach_due`). The best pattern wins if its score passes its
-//! threshold; below, the sound is none of the patterns and nothing fires. Two patterns that one window cannot tell apart and that part later
+//! follows it (`SpectralMatcher::teach_due`). The best pattern wins if its score passes
+//! its threshold; below, the sound is none of the patterns and nothing fires. Two patterns that one window cannot tell apart and that part later
 //! (a spoken "pop" and "pew", the same "p" for 40 ms) are decided between over more
 //! windows, up to `max_decision_seconds` (`Separating` in [`super::enrol`],
 //! `SpectralMatcher::scores_over`), and so, over two, is an instance that its first
@@ -467,6 +467,7 @@ pub struct SpectralMatcher {
     /// The impulses the background took for speech, waiting to be heard again once it is
     /// known whether their sound went on as a syllable's.
     second_looks: SecondLooks,
+    /// What the impulses that fired taught tracking, until the sound after them is in.
     lessons: Fifo<Lesson, LESSONS>,
     /// What tracking has learnt from the impulses whose after-span was clear of talk.
     confirmed: Tracked,
@@ -2111,12 +2112,10 @@ impl SpectralMatcher {
         }
     }
 
-    /// Lets the tracked templates of `pi`, which fired, follow this instance
-    /// ([`Tracked::follow`]); `over_fired_impulse` if it began over such a tail,
-    /// `amid_talk` if it was not heard clear of talk ([`Context::guard`]). What it
-    /// taught.
-    /// What the impulse of pattern `pi` that fires at `time_sample`, its take's sound
-    /// ending at `end_sample`, will teach tracking once the sound after it is in.
+    /// What the impulse of pattern `pi` that fires at `time_sample` (decided as `d`),
+    /// its take's sound ending at `end_sample`, teaches tracking ([`Tracked::follow`]):
+    /// this instance as it scored, whether it began over a fired word's tail, and
+    /// whether it was heard amid talk ([`Context::guard`]).
     fn lesson(&self, pi: usize, time_sample: u64, end_sample: u64, d: &Decision) -> Lesson {
         let other = self
             .pattern_scores
