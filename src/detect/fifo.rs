@@ -72,6 +72,7 @@ mod tests {
         assert_eq!(q.pop(), Some(0));
         q.push(3);
         assert_eq!(q.front(), Some(1));
+        assert_eq!(q.iter().copied().collect::<Vec<_>>(), [1, 2, 3]);
         assert_eq!(
             [q.pop(), q.pop(), q.pop(), q.pop()],
             [Some(1), Some(2), Some(3), None]

@@ -808,6 +808,7 @@ impl SpectralMatcher {
         let copies = Copies::new(copy_takes.into_iter(), rate);
         let second_looks =
             SecondLooks::new(SyllableParams::default(), rate, settings.decision_seconds);
+        let tracked = Tracked::new(TrackParams::default(), n_patterns, FEATURES);
         let mut matcher = Self {
             rate,
             decision_frames,
@@ -865,7 +866,8 @@ impl SpectralMatcher {
             last_fired: None,
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
-            tracked: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
+            confirmed: tracked.clone(),
+            tracked,
             takes_agree: vec![TakesAgree::NONE; n_patterns],
             pattern_scores: vec![PatternScore::NONE; n_patterns],
             best_instance: vec![0.0; FEATURES],
@@ -891,7 +893,6 @@ impl SpectralMatcher {
             copies,
             second_looks,
             lessons: Fifo::new(),
-            confirmed: Tracked::new(TrackParams::default(), n_patterns, FEATURES),
         };
         let bands = matcher.analyzer.cepstrum.bands();
         // Whatever bands the stream leaves compared, no pair waits longer than this.
