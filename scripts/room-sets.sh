@@ -9,7 +9,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR dc OFFSET
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR mp3 KBITS [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
@@ -33,7 +33,8 @@
 # lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
 # resampled to a full rate on its way in); `sequences` as for rate.
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
-# (an input gain set too high).
+# (an input gain set too high); with `sequences`, the sequences alone, the takes as they
+# were (enrolled close to the microphone, performed further from it, or the other way).
 # dc: every file OFFSET (of full scale) higher, 16-bit or as it was: a microphone's or
 # a converter's DC offset; what passes full scale clips.
 # mp3: every file through an MP3 encoder at KBITS kbit/s and back (ffmpeg, LAME; a
@@ -126,10 +127,14 @@ case $kind in
         esac
         ;;
     gain)
-        [ $# -eq 1 ] || usage
-        gain_db=$1
+        [ $# -ge 1 ] && [ $# -le 2 ] || usage
+        gain_db=$1 which=${2:-all}
         [[ $gain_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gain $gain_db: expected decibels, such as 12 or -30" >&2; exit 2; }
-        added="every file at $gain_db dB, clipped at full scale"
+        case $which in
+            all) added="every file at $gain_db dB, clipped at full scale" ;;
+            sequences) added="the sequences at $gain_db dB, clipped at full scale, the takes as they were" ;;
+            *) echo "room-sets.sh: gain $gain_db $which: expected nothing or 'sequences' after the gain" >&2; exit 2 ;;
+        esac
         ;;
     dc)
         [ $# -eq 1 ] || usage

@@ -7,10 +7,11 @@
 //! A recognised impulse covers its take's length from its onset, longer while its sound
 //! goes on and then while it dies away, until a new sound rises out of it
 //! ([`Context::follow`]); a held sound covers up to its end, then its sound dying away
-//! the same way for as long as the guard looks back; a pattern's sound
-//! that only the guard stopped covers its take's length too, or less where a new sound
-//! rises out of it (a held one, up to the end the held stage finds for it, then as it
-//! dies away), so that only sounds that are none of the patterns keep the guard closed.
+//! the same way for as long as the guard looks back; a pattern's sound that only the
+//! guard or `min_strength` stopped covers its take's length too, or less where a new
+//! sound rises out of it (a held one, up to the end the held stage finds for it, then
+//! as it dies away), so that only sounds that are none of the patterns keep the guard
+//! closed.
 //! The one exception passes a stop on once at most: a sound the guard stopped on such
 //! sound, and that lies as near speech as to its pattern, is the same talk going on and
 //! counts as unrecognised (`near_speech`, in [`Context::stopped`] and

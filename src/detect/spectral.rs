@@ -1549,14 +1549,16 @@ impl SpectralMatcher {
     /// A sound the guard stopped, but that the threshold and the background would have
     /// let through, is a pattern's sound too: it covers its span as a fired one does, so
     /// the guard does not feed on its own decisions (only sounds that are none of the
-    /// patterns keep it closed). One that lies as near speech as to its pattern (within
-    /// the background's margin either way) and that the guard stopped on unrecognised
-    /// sound is that talk going on: it counts as unrecognised sound, but what it alone
-    /// closes the guard on covers again, so a stop passes on once at most
+    /// patterns keep it closed). So is one that only `min_strength` stopped: too faint
+    /// to be the user's, but no talk, so that a performer quieter than the takes is not
+    /// stopped by their own fainter sounds. One that lies as near speech as to its
+    /// pattern (within the background's margin either way) and that the guard stopped
+    /// on unrecognised sound is that talk going on: it counts as unrecognised sound, but
+    /// what it alone closes the guard on covers again, so a stop passes on once at most
     /// (`docs/speech-guard.md`).
     fn cover_stopped(&mut self, d: &Decision) {
         let evidence = &d.evidence;
-        if d.outcome != Outcome::SpeechGuard
+        if !matches!(d.outcome, Outcome::SpeechGuard | Outcome::MinStrength)
             || evidence.below_threshold()
             || evidence.like_speech(&self.gates)
         {
