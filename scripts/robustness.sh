@@ -66,6 +66,8 @@ rows=(
   "mp3-64|decoded from MP3 at 64 kbit/s|mp3 64|mp3-64|plain"
   "mp3-32|... at 32 kbit/s (a voice call)|mp3 32|mp3-32|plain"
   "quieter|the sequences 15 dB quieter than the takes (performed further from the microphone than enrolled)|gain -15 sequences|gain-15s|plain"
+  "higher|the sequences a semitone higher than the takes (a voice that sits higher than when it enrolled)|pitch 100|pitch100|plain"
+  "lower|... a semitone lower|pitch -100|pitch-100|plain"
   "silence|0.5 s of digital silence before each sequence|silence 0.5|silence|plain"
   "head|each sequence cut 2 ms before its first sound|head 0.002|head|plain"
   "rate-16k|every file at 16 kHz (a headset)|rate 16000|rate16k|plain"

@@ -10,6 +10,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB [sequences]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR pitch CENTS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR dc OFFSET
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR mp3 KBITS [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR silence SECONDS
@@ -35,6 +36,9 @@
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
 # (an input gain set too high); with `sequences`, the sequences alone, the takes as they
 # were (enrolled close to the microphone, performed further from it, or the other way).
+# pitch: the sequences CENTS higher (lower, negative), their timing kept (sox's pitch),
+# the takes as they were: a performer whose voice sits higher or lower than when they
+# enrolled.
 # dc: every file OFFSET (of full scale) higher, 16-bit or as it was: a microphone's or
 # a converter's DC offset; what passes full scale clips.
 # mp3: every file through an MP3 encoder at KBITS kbit/s and back (ffmpeg, LAME; a
@@ -136,6 +140,12 @@ case $kind in
             *) echo "room-sets.sh: gain $gain_db $which: expected nothing or 'sequences' after the gain" >&2; exit 2 ;;
         esac
         ;;
+    pitch)
+        [ $# -eq 1 ] || usage
+        cents=$1 which=sequences
+        [[ $cents =~ ^-?[0-9]+$ ]] || { echo "room-sets.sh: pitch $cents: expected cents, such as 200 or -100" >&2; exit 2; }
+        added="the sequences $cents cents higher, the takes as they were"
+        ;;
     dc)
         [ $# -eq 1 ] || usage
         offset=$1
@@ -175,7 +185,7 @@ case $kind in
         [[ $hold =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db $hold: expected the hold in seconds, such as 0.1" >&2; exit 2; }
         added="every file through a noise gate $over_db dB over its room, held $hold s"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, dc, mp3, silence, trim, head or gate" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head or gate" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -288,6 +298,8 @@ PY
         elif [ "$kind" = mp3 ]; then
             ffmpeg -loglevel error -y -i "$wav" -c:a libmp3lame -b:a "${kbits}k" "$tmp/coded.mp3"
             ffmpeg -loglevel error -y -i "$tmp/coded.mp3" -ac 1 -c:a pcm_s16le "$out/$name/$rel"
+        elif [ "$kind" = pitch ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" pitch "$cents"
         elif [ "$kind" = dc ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" dcshift "$offset"
         elif [ "$kind" = gain ]; then
