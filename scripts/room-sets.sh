@@ -38,7 +38,8 @@
 # were (enrolled close to the microphone, performed further from it, or the other way).
 # pitch: the sequences CENTS higher (lower, negative), their timing kept (sox's pitch),
 # the takes as they were: a performer whose voice sits higher or lower than when they
-# enrolled.
+# enrolled. sox's pitch moves each sound by a few milliseconds, which the truth does not
+# follow (well within the 50 ms the scoring allows).
 # dc: every file OFFSET (of full scale) higher, 16-bit or as it was: a microphone's or
 # a converter's DC offset; what passes full scale clips.
 # mp3: every file through an MP3 encoder at KBITS kbit/s and back (ffmpeg, LAME; a
