@@ -60,6 +60,7 @@ rows=(
   "room-1.32s-dry-takes|enrolled dry, performed in the 1.32 s room|reverb 50 100 sequences|room50s|plain"
   "brown|brown noise (rumble) 30 dB under full scale|noise brownnoise -30|brown|plain"
   "pink|pink noise 40 dB under full scale|noise pinknoise -40|pink|plain"
+  "pink-takes|enrolled in that pink noise, performed in quiet (the takes alone noisy)|noise pinknoise -40 takes|pink-takes|plain"
   "hum-50|mains buzz at 50 Hz and its harmonics, 40 dB down|hum 50 -40|hum50|plain"
   "hum-60|... at 60 Hz|hum 60 -40|hum60|plain"
   "gate|through a noise gate 10 dB over the room, held 0.1 s|gate 10|gate10|plain"

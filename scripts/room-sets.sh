@@ -5,7 +5,7 @@
 # holds up in rooms that no dev set has.
 #
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR reverb [REVERBERANCE [ROOM_SCALE [sequences]]]
-#     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB [sequences]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR noise TYPE LEVEL_DB [sequences|takes]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
@@ -24,7 +24,8 @@
 # makes the sequences (enrolled close to the microphone, performed in the room).
 # noise: sox's TYPE (whitenoise, pinknoise, brownnoise) at LEVEL_DB (its peaks that
 # far under full scale) added to each file; `sequences` as for reverb (enrolled in a
-# quiet room).
+# quiet room); `takes`, the takes alone (enrolled in a noisy room, performed in a quiet
+# one).
 # hum: mains buzz (a ground loop, a lamp's dimmer) of FREQUENCY Hz and its harmonics up
 # to the 8th, the k-th at 1/k of the fundamental (a sawtooth's spectrum), its peaks
 # LEVEL_DB under full scale, added to each file.
@@ -87,15 +88,15 @@ case $kind in
         [ $# -ge 2 ] && [ $# -le 3 ] || usage
         noise_type=$1 level_db=$2 which=${3:-all}
         case $which in
-            all | sequences) ;;
-            *) echo "room-sets.sh: noise $noise_type $level_db $which: expected nothing or 'sequences' after the level" >&2; exit 2 ;;
+            all | sequences | takes) ;;
+            *) echo "room-sets.sh: noise $noise_type $level_db $which: expected nothing, 'sequences' or 'takes' after the level" >&2; exit 2 ;;
         esac
         case $noise_type in
             whitenoise | pinknoise | brownnoise) ;;
             *) echo "room-sets.sh: noise type $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
         esac
         added="$noise_type, peaks $level_db dB"
-        [ "$which" = all ] || added="$added, the sequences alone"
+        [ "$which" = all ] || added="$added, the $which alone"
         ;;
     hum)
         [ $# -eq 2 ] || usage
@@ -288,7 +289,9 @@ PY
     fi
     for wav in "$set"/seq_*.wav "$set"/patterns/*.wav; do
         rel=${wav#"$set"/}
-        if [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
+        if [ "${which:-all}" = takes ] && [ "${rel#patterns/}" = "$rel" ]; then
+            cp "$wav" "$out/$name/$rel"
+        elif [ "${which:-all}" = sequences ] && [ "${rel#patterns/}" != "$rel" ]; then
             if [ "$kind" = reverb ]; then
                 sox -R -V1 "$wav" "$out/$name/$rel" "${chain[@]:0:2}"
             else
