@@ -467,16 +467,21 @@ fn a_pattern_enrolled_two_different_ways_is_found_both_ways() {
     assert!(s.overall.f1 >= 0.95, "{}", onomato::eval::render_text(&s));
 }
 
-/// How many of `times` have a kick ("b") event within 50 ms.
-fn kicks_found(events: &[Event], times: &[f64]) -> usize {
+/// How many of `times` have an event of `label` within `within` seconds.
+fn found_near(events: &[Event], label: &str, times: &[f64], within: f64) -> usize {
     times
         .iter()
         .filter(|&&t| {
             events
                 .iter()
-                .any(|e| &*e.pattern == "b" && (e.time - t).abs() < 0.05)
+                .any(|e| &*e.pattern == label && (e.time - t).abs() < within)
         })
         .count()
+}
+
+/// How many of `times` have a kick ("b") event within 50 ms.
+fn kicks_found(events: &[Event], times: &[f64]) -> usize {
+    found_near(events, "b", times, 0.05)
 }
 
 #[test]
@@ -625,16 +630,7 @@ fn the_later_part_of_an_enrolled_sound_is_no_second_event_but_another_hit_there_
     add_noise(&mut rec, 0.0005, 14);
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 256);
-    let found = |label: &str, times: &[f64]| {
-        times
-            .iter()
-            .filter(|&&t| {
-                events
-                    .iter()
-                    .any(|e| &*e.pattern == label && (e.time - t).abs() < 0.05)
-            })
-            .count()
-    };
+    let found = |label: &str, times: &[f64]| found_near(&events, label, times, 0.05);
     assert_eq!(found("pop", &pops), 8, "{events:#?}");
     assert_eq!(found("b", &kicks), 4, "{events:#?}");
     assert_eq!(events.len(), 12, "{events:#?}");
@@ -1546,14 +1542,7 @@ fn an_instance_between_two_patterns_is_decided_over_two_windows() {
             .iter()
             .filter(|r| r.waited_for == Some(onomato::detect::Wait::BetweenTwo))
             .count();
-        let dull_found = dull
-            .iter()
-            .filter(|&&t| {
-                events
-                    .iter()
-                    .any(|e| &*e.pattern == "dull" && (e.time - t).abs() < 0.05)
-            })
-            .count();
+        let dull_found = found_near(&events, "dull", &dull, 0.05);
         (dull_found, events.len(), waited)
     };
     let two_windows = spectral();
@@ -1842,14 +1831,7 @@ fn a_word_too_faint_to_fire_does_not_stop_the_louder_one_after_it() {
     }
     add_noise(&mut rec, 0.00002, 13);
     let (events, outcomes) = detect_explained(patterns, &settings, &rec);
-    let found = louder
-        .iter()
-        .filter(|&&t| {
-            events
-                .iter()
-                .any(|e| &*e.pattern == "word" && (e.time - t).abs() < 0.02)
-        })
-        .count();
+    let found = found_near(&events, "word", &louder, 0.02);
     assert_eq!(outcomes.get("min_strength"), Some(&4), "{outcomes:?}");
     assert_eq!(found, 4, "{events:#?}\n{outcomes:?}");
     assert_eq!(events.len(), 4, "{events:#?}");
