@@ -20,6 +20,8 @@
 #   voice protocol of the dev sets and of both unheard folders with three takes a word;
 # - noise-sweeps: scripts/noise-sweeps.py, zingerbox's noise sweep made of the other
 #   kits' hits;
+# - talk-30, talk-20: scripts/room-sets.sh ... talk, with the speech of the unheard
+#   voice en+klatt (the voices row's N_speech_espeak_klatt, under WORK_DIR) as the talk;
 # - every other row: scripts/room-sets.sh on the dev sets, with the arguments shown.
 # Needs what build.sh, other-voices.py and room-sets.sh need (espeak-ng, sox, ffmpeg).
 set -euo pipefail
@@ -75,6 +77,8 @@ rows=(
   "rate-8k|every file at 8 kHz (a telephone)|rate 8000|rate8k|plain"
   "lowpass|every file low-passed at 6.3 kHz, at its own rate|lowpass 6300|lowpass|plain"
   "lowpass-seq|the sequences alone low-passed so (takes from a good microphone)|lowpass 6300 sequences|lowpass-seq|plain"
+  "talk-30|someone else talking 30 dB under the sequences' peaks (an unheard voice reading; enrolled in quiet)|talk voices/N_speech_espeak_klatt/seq_00.wav -30|talk30|plain"
+  "talk-20|... 20 dB under them|talk voices/N_speech_espeak_klatt/seq_00.wav -20|talk20|plain"
 )
 
 make_folder() {  # name how folder
@@ -99,6 +103,11 @@ make_folder() {  # name how folder
       "$py" "$here/more-voice-takes.py" "$work/voices-more" "$out"
       ;;
     noise-sweeps) "$py" "$here/noise-sweeps.py" "$out" ;;
+    talk-30 | talk-20)
+      make_folder voices other-voices.py voices
+      local talk=($how)  # talk FILE (under WORK_DIR) LEVEL_DB
+      bash "$here/room-sets.sh" "$sets" "$out" talk "$work/${talk[1]}" "${talk[2]}" >/dev/null
+      ;;
     *)
       # shellcheck disable=SC2086  # the room's arguments, word by word
       bash "$here/room-sets.sh" "$sets" "$out" $how >/dev/null

@@ -17,6 +17,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR trim SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gate OVER_DB [HOLD_SECONDS]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR talk FILE LEVEL_DB
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100);
@@ -62,6 +63,11 @@
 # the takes go through the same gate) until HOLD_SECONDS (default 0.1) after the last
 # such block, digital silence while closed; no look-ahead, so a sound's soft start under
 # the threshold is cut, as a gate cuts it.
+# talk: the recording FILE (someone else talking: a television, a colleague) under each
+# sequence, from its start, repeated as long as the sequence, its peaks LEVEL_DB under
+# the sequence's own peak (a set recorded quietly hears the talk as quietly), mixed at
+# equal weight as the noise is; the takes as they were (enrolled in quiet). The speech
+# sets get it too, so their false events count what the talk fires.
 # All repeatable (sox -R).
 set -euo pipefail
 usage() {
@@ -187,7 +193,14 @@ case $kind in
         [[ $hold =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: gate $over_db $hold: expected the hold in seconds, such as 0.1" >&2; exit 2; }
         added="every file through a noise gate $over_db dB over its room, held $hold s"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head or gate" >&2; exit 2 ;;
+    talk)
+        [ $# -eq 2 ] || usage
+        talk_file=$1 level_db=$2 which=sequences
+        [ -f "$talk_file" ] || { echo "room-sets.sh: talk $talk_file: no such recording" >&2; exit 2; }
+        [[ $level_db =~ ^-[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: talk $talk_file $level_db: expected decibels under the sequence's peak, such as -20" >&2; exit 2; }
+        added="$(basename "$talk_file") under the sequences, its peaks $level_db dB under theirs, the takes as they were"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate or talk" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -333,6 +346,13 @@ PY
             if [ "$kind" = noise ]; then
                 sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
                     synth "$seconds" "$noise_type" vol "$level_db" dB
+            elif [ "$kind" = talk ]; then
+                # Repeated whole until it is as long as the file, then cut to it.
+                repeats=$(awk -v a="$seconds" -v b="$(soxi -D "$talk_file" 2> /dev/null)" 'BEGIN { print int(a / b) }')
+                peak_db=$(sox -V1 "$wav" -n stats 2>&1 | awk '$1 == "Pk" && $2 == "lev" { print $4 }')
+                sox -R -V1 "$talk_file" -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
+                    repeat "$repeats" trim 0 "$seconds" \
+                    gain -n "$(awk -v p="$peak_db" -v l="$level_db" 'BEGIN { print p + l }')"
             else
                 sox -R -V1 -n -r "$rate" -c 8 -b 32 -e floating-point "$tmp/buzz.wav" \
                     synth "$seconds" "${sines[@]}"
