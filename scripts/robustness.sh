@@ -105,7 +105,8 @@ make_folder() {  # name how folder
     noise-sweeps) "$py" "$here/noise-sweeps.py" "$out" ;;
     talk-30 | talk-20)
       make_folder voices other-voices.py voices
-      local talk=($how)  # talk FILE (under WORK_DIR) LEVEL_DB
+      # shellcheck disable=SC2206  # talk FILE (under WORK_DIR) LEVEL_DB, word by word
+      local talk=($how)
       bash "$here/room-sets.sh" "$sets" "$out" talk "$work/${talk[1]}" "${talk[2]}" >/dev/null
       ;;
     *)

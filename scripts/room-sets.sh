@@ -197,6 +197,8 @@ case $kind in
         [ $# -eq 2 ] || usage
         talk_file=$1 level_db=$2 which=sequences
         [ -f "$talk_file" ] || { echo "room-sets.sh: talk $talk_file: no such recording" >&2; exit 2; }
+        talk_seconds=$(soxi -D "$talk_file" 2> /dev/null) || { echo "room-sets.sh: talk $talk_file: not a recording sox can read" >&2; exit 2; }
+        awk -v d="$talk_seconds" 'BEGIN { exit !(d > 0) }' || { echo "room-sets.sh: talk $talk_file: expected some sound, found $talk_seconds s" >&2; exit 2; }
         [[ $level_db =~ ^-[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: talk $talk_file $level_db: expected decibels under the sequence's peak, such as -20" >&2; exit 2; }
         added="$(basename "$talk_file") under the sequences, its peaks $level_db dB under theirs, the takes as they were"
         ;;
@@ -348,8 +350,9 @@ PY
                     synth "$seconds" "$noise_type" vol "$level_db" dB
             elif [ "$kind" = talk ]; then
                 # Repeated whole until it is as long as the file, then cut to it.
-                repeats=$(awk -v a="$seconds" -v b="$(soxi -D "$talk_file" 2> /dev/null)" 'BEGIN { print int(a / b) }')
+                repeats=$(awk -v a="$seconds" -v b="$talk_seconds" 'BEGIN { print int(a / b) }')
                 peak_db=$(sox -V1 "$wav" -n stats 2>&1 | awk '$1 == "Pk" && $2 == "lev" { print $4 }')
+                [[ $peak_db =~ ^-?[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: $wav: expected some sound to lay the talk under, found a peak of ${peak_db:-nothing} dB" >&2; exit 1; }
                 sox -R -V1 "$talk_file" -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
                     repeat "$repeats" trim 0 "$seconds" \
                     gain -n "$(awk -v p="$peak_db" -v l="$level_db" 'BEGIN { print p + l }')"
