@@ -471,12 +471,15 @@ fn a_pattern_enrolled_two_different_ways_is_found_both_ways() {
 fn found_near(events: &[Event], label: &str, times: &[f64], within: f64) -> usize {
     times
         .iter()
-        .filter(|&&t| {
-            events
-                .iter()
-                .any(|e| &*e.pattern == label && (e.time - t).abs() < within)
-        })
+        .filter(|&&t| found_at(events, label, t, within))
         .count()
+}
+
+/// Whether an event of `label` lies within `within` seconds of `t`.
+fn found_at(events: &[Event], label: &str, t: f64, within: f64) -> bool {
+    events
+        .iter()
+        .any(|e| &*e.pattern == label && (e.time - t).abs() < within)
 }
 
 /// How many of `times` have a kick ("b") event within 50 ms.
@@ -688,11 +691,9 @@ fn a_held_sound_is_found_whether_its_soft_start_stands_out_of_the_noise_or_not()
     add_noise(&mut rec, 0.001, 15);
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
     let events = detect_in_blocks(&mut det, &rec, 256);
-    for t in &starts {
+    for &t in &starts {
         assert!(
-            events
-                .iter()
-                .any(|e| &*e.pattern == "hoo" && (e.time - t).abs() < 0.05),
+            found_at(&events, "hoo", t, 0.05),
             "no hoo at {t:.3} s: {events:#?}"
         );
     }
@@ -793,11 +794,7 @@ fn a_sound_heard_amid_unrecognised_sound_teaches_tracking_nothing() {
 /// and those far from it, which only a template that followed the drift recognises, are
 /// not.
 fn assert_followed_only_near_the_take(events: &[Event], pews: &[(f64, f64)]) {
-    let found = |at: f64| {
-        events
-            .iter()
-            .any(|e| &*e.pattern == "pew" && (e.time - at).abs() < 0.05)
-    };
+    let found = |at: f64| found_at(events, "pew", at, 0.05);
     for &(at, factor) in pews.iter().filter(|(_, f)| *f < 1.1) {
         assert!(found(at), "the pew {factor:.2} times as high: {events:#?}");
     }
@@ -1369,11 +1366,7 @@ fn a_hit_right_after_a_held_sound_that_replaced_another_is_found() {
     let mut det = Detector::new(patterns, &settings, RATE).unwrap();
     det.enable_explain();
     let events = detect_in_blocks(&mut det, &rec, 256);
-    let at = |label: &str, t: f64| {
-        events
-            .iter()
-            .any(|e| &*e.pattern == label && (e.time - t).abs() < 0.05)
-    };
+    let at = |label: &str, t: f64| found_at(&events, label, t, 0.05);
     assert!(at("hoo", hoo_at), "no hoo at {hoo_at:.3} s: {events:#?}");
     assert!(at("b", kick_at), "no kick at {kick_at:.3} s: {events:#?}");
 }
