@@ -12,6 +12,8 @@
 # With ROWs (the names in `rows` below), only those. The rows and what makes them:
 # - voices, voices-more, exact: scripts/other-voices.py (six unheard espeak-ng voices,
 #   six more, and the exact-copies protocol for their words);
+# - exact-real: scripts/exact-real.py, the exact-copies protocol for the real sets'
+#   own takes;
 # - take2, take3: scripts/other-takes.py, the real sets enrolled from another take;
 # - takes1-2, takes1-3: scripts/more-takes.py, the real sets enrolled from their first
 #   two or three takes (scored with scripts/with-more-takes.sh), and the same folders
@@ -46,6 +48,7 @@ rows=(
   "voices|six espeak-ng voices that no set, test or background speech uses: their words, rhythm and own speech|other-voices.py|voices|plain"
   "voices-more|six further voices|other-voices.py --more|voices-more|plain"
   "exact|exact copies of those twelve voices' words (the protocol of D5_exact)|other-voices.py --exact|exact|plain"
+  "exact-real|exact copies of the real sets' own takes, bleed and room included (the protocol of D5_exact)|exact-real.py|exact-real|plain"
   "take2|the real sets enrolled from each label's second take|other-takes.py 1|take2|plain"
   "take3|... from its third take|other-takes.py 2|take3|plain"
   "take1-of-2|the real sets, take 1 alone enrolling, scored on the takes after the second|more-takes.py 2, take 1 alone|takes2|plain"
@@ -89,6 +92,7 @@ make_folder() {  # name how folder
     voices) "$py" "$here/other-voices.py" "$out" ;;
     voices-more) "$py" "$here/other-voices.py" --more "$out" ;;
     exact) "$py" "$here/other-voices.py" --exact "$out" ;;
+    exact-real) "$py" "$here/exact-real.py" "$sets" "$out" ;;
     take2) "$py" "$here/other-takes.py" 1 "$out" ;;
     take3) "$py" "$here/other-takes.py" 2 "$out" ;;
     take1-of-2 | takes1-2) "$py" "$here/more-takes.py" 2 "$out" ;;
