@@ -53,7 +53,10 @@ def read_takes(folder):
         if kind != "impulse":
             continue
         path = folder / "patterns" / f"{label}.wav"
-        x, sr = sf.read(str(path), dtype="float64", always_2d=True)
+        try:
+            x, sr = sf.read(str(path), dtype="float64", always_2d=True)
+        except (OSError, RuntimeError) as e:  # soundfile raises LibsndfileError, a RuntimeError
+            raise build.BuildError(f"cannot read {path}: {e}") from e
         if rate is not None and sr != rate:
             raise build.BuildError(f"{path} is at {sr} Hz, the set's other takes at {rate} Hz")
         rate = sr
@@ -97,7 +100,10 @@ def main():
         sys.exit(f"exact-real.py: {sets} lacks {', '.join(missing)} (bash ../shared/devsets/build.sh {sets})")
     out.mkdir(parents=True, exist_ok=True)
     for s in REAL_SETS:
-        exact_copies(sets / s, out)
+        try:
+            exact_copies(sets / s, out)
+        except (build.BuildError, KeyError, ValueError) as e:
+            sys.exit(f"exact-real.py: {sets / s}: {e}")
 
 
 if __name__ == "__main__":
