@@ -21,12 +21,12 @@ import json
 import pathlib
 import sys
 
-import numpy as np
 import soundfile as sf
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
 import build  # noqa: E402  (the development sets' generator)
+from exact_copies import sequences as copies_sequences  # noqa: E402
 
 # The real sets whose takes are copied.
 REAL_SETS = [
@@ -41,7 +41,6 @@ REAL_SETS = [
 ]
 # Where a take's sound begins in its file (build.py cuts every take so).
 ONSET_IN_TAKE_S = 0.005
-SEQ_SECONDS = 15.0
 TAKES_PER_SEQ = 5
 
 
@@ -71,22 +70,7 @@ def exact_copies(folder, out):
     takes, sr = read_takes(folder)
     name = "D5_exact_" + folder.name.split("_", 1)[1]
     rng = build.rng_for(name)
-    names = sorted(takes)
-    seqs = []
-    for _ in range(max(2, -(-len(names) // TAKES_PER_SEQ))):
-        n = int(SEQ_SECONDS * sr)
-        s = 10 ** (-50 / 20) * rng.standard_normal(n)
-        rows, t = [], int(0.3 * sr)
-        while True:
-            k = names[rng.integers(len(names))]
-            p = takes[k]
-            if t + len(p) > n - sr // 5:
-                break
-            g = 10 ** (rng.uniform(-12, 0) / 20)
-            s[t:t + len(p)] += g * p
-            rows.append((t / sr + ONSET_IN_TAKE_S, k, "", g))
-            t += len(p) + int(rng.uniform(0.08, 0.5) * sr)
-        seqs.append((s, rows))
+    seqs = copies_sequences(rng, takes, sr, max(2, -(-len(takes) // TAKES_PER_SEQ)), ONSET_IN_TAKE_S)
     build.save_set(out / name, takes, {k: "impulse" for k in takes}, seqs, sr, subtype="FLOAT",
                    digits=6, about=f"exact copies of the takes of {folder.name}; onset 5 ms into each copy")
 

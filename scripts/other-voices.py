@@ -29,6 +29,7 @@ import numpy as np
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
 import build  # noqa: E402  (the development sets' generator)
+from exact_copies import sequences as copies_sequences  # noqa: E402
 
 # (espeak-ng voice, set suffix, impulse words): voices whose variant no development set,
 # no test and no speech of the built-in background model (scripts/background-speech.sh)
@@ -75,22 +76,7 @@ def exact_copies(out, short, words):
         e = np.abs(x)
         idx = np.nonzero(e > 0.05 * e.max())[0]
         takes[word] = x[idx[0]:idx[-1] + 1]
-    names = sorted(takes)
-    seqs = []
-    for _ in range(2):
-        n = int(15 * sr)
-        s = 10 ** (-50 / 20) * rng.standard_normal(n)
-        rows, t = [], int(0.3 * sr)
-        while True:
-            k = names[rng.integers(len(names))]
-            p = takes[k]
-            if t + len(p) > n - sr // 5:
-                break
-            g = 10 ** (rng.uniform(-12, 0) / 20)
-            s[t:t + len(p)] += g * p
-            rows.append((t / sr, k, "", g))
-            t += len(p) + int(rng.uniform(0.08, 0.5) * sr)
-        seqs.append((s, rows))
+    seqs = copies_sequences(rng, takes, sr, 2)
     about = "exact copies: " + ", ".join(f"{w} ({v})" for w, v in words.items()) + "; onset = first sample"
     build.save_set(out / name, takes, {k: "impulse" for k in takes}, seqs, sr, subtype="FLOAT", digits=6,
                    about=about)
