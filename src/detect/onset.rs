@@ -265,16 +265,20 @@ impl OnsetDetector {
         if frames == 0 {
             return;
         }
-        let power = |f: usize, b: usize| {
+        for f in (0..frames).rev() {
             let frame = &powers[f * bands..(f + 1) * bands];
-            band_power(frame[b], least_band_power(loudest_band(frame)))
-        };
-        for b in 0..bands {
-            let fl = (0..frames - 1).rev().fold(power(frames - 1, b), |fl, f| {
-                (fl * self.floor_rise).min(power(f, b).max(fl * self.floor_fall))
-            });
-            self.floor[b] = fl;
-            self.before_stream[b] = 10.0 * ((1.0 + self.params.floor_weight) * fl).log10();
+            let least = least_band_power(loudest_band(frame));
+            for (fl, &p) in self.floor.iter_mut().zip(frame) {
+                let p = band_power(p, least);
+                *fl = if f == frames - 1 {
+                    p
+                } else {
+                    (*fl * self.floor_rise).min(p.max(*fl * self.floor_fall))
+                };
+            }
+        }
+        for (before, &fl) in self.before_stream.iter_mut().zip(&self.floor) {
+            *before = 10.0 * ((1.0 + self.params.floor_weight) * fl).log10();
         }
         self.primed = true;
     }
