@@ -1295,7 +1295,10 @@ impl DetectorSettings {
 
     /// Checks every field; `origin` names the source in messages.
     pub fn validate(&self, origin: &str) -> Result<(), ConfigError> {
+        // Each key is named with the table it is written in.
         let item = format!("{origin}, [detector]");
+        let spectral = format!("{origin}, [detector.spectral]");
+        let waveform = format!("{origin}, [detector.waveform]");
         if !(8_000..=192_000).contains(&self.sample_rate) {
             return Err(invalid(
                 &item,
@@ -1312,14 +1315,14 @@ impl DetectorSettings {
         if let Some(s) = self.suppression_seconds {
             if !(s.is_finite() && (0.0..=5.0).contains(&s)) {
                 return Err(invalid(
-                    &item,
+                    &waveform,
                     format!("suppression_seconds must be between 0 and 5, found {s}"),
                 ));
             }
         }
         if self.method != Method::Spectral && !self.background.is_empty() {
             return Err(invalid(
-                &item,
+                &spectral,
                 format!(
                     "background is a setting of the spectral method (the built-in background of speech that it joins belongs to it); the method here is \"{}\"",
                     self.method.name()
@@ -1329,14 +1332,14 @@ impl DetectorSettings {
         let d = self.decision_seconds;
         if !(d.is_finite() && (0.015..=0.2).contains(&d)) {
             return Err(invalid(
-                &item,
+                &spectral,
                 format!("decision_seconds must be between 0.015 and 0.2, found {d}"),
             ));
         }
         let m = self.max_decision_seconds;
         if !(m.is_finite() && (d..=0.2).contains(&m)) {
             return Err(invalid(
-                &item,
+                &spectral,
                 format!(
                     "max_decision_seconds must be between decision_seconds ({d}) and 0.2, found {m}"
                 ),
@@ -1345,7 +1348,7 @@ impl DetectorSettings {
         let g = self.speech_guard_seconds;
         if !(g.is_finite() && (0.0..=MAX_SPEECH_GUARD_SECONDS).contains(&g)) {
             return Err(invalid(
-                &item,
+                &spectral,
                 format!(
                     "speech_guard_seconds must be between 0 (off) and {MAX_SPEECH_GUARD_SECONDS}, found {g}"
                 ),
@@ -1354,7 +1357,7 @@ impl DetectorSettings {
         let s = self.min_strength;
         if !(s.is_finite() && (0.0..=1.0).contains(&s)) {
             return Err(invalid(
-                &item,
+                &spectral,
                 format!("min_strength must be between 0 (any level) and 1, found {s}"),
             ));
         }

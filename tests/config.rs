@@ -95,10 +95,11 @@ fn bad_values_name_the_item_and_what_was_expected_and_found() {
         ("[detector]\nsample_rate = 4000\n", &["sample_rate must be between 8000 and 192000 Hz, found 4000"]),
         ("[detector]\nsample_rate = \"fast\"\n", &["invalid type", "expected u32"]),
         ("[detector]\nmax_pattern_seconds = 0\n", &["max_pattern_seconds must be between 0.05 and 60, found 0"]),
-        ("[detector]\nmethod = \"waveform\"\n[detector.waveform]\nsuppression_seconds = -1\n", &["suppression_seconds must be between 0 and 5, found -1"]),
-        ("[detector.spectral]\nspeech_guard_seconds = 2\n", &["speech_guard_seconds must be between 0 (off) and 1, found 2"]),
-        ("[detector.spectral]\nmin_strength = 1.5\n", &["min_strength must be between 0 (any level) and 1, found 1.5"]),
-        ("[detector.spectral]\nmax_decision_seconds = 0.02\n", &["max_decision_seconds must be between decision_seconds (0.025) and 0.2, found 0.02"]),
+        ("[detector]\nmethod = \"waveform\"\n[detector.waveform]\nsuppression_seconds = -1\n", &["[detector.waveform]", "suppression_seconds must be between 0 and 5, found -1"]),
+        ("[detector.spectral]\nspeech_guard_seconds = 2\n", &["[detector.spectral]", "speech_guard_seconds must be between 0 (off) and 1, found 2"]),
+        ("[detector.spectral]\nmin_strength = 1.5\n", &["[detector.spectral]", "min_strength must be between 0 (any level) and 1, found 1.5"]),
+        ("[detector.spectral]\ndecision_seconds = 0.01\n", &["[detector.spectral]", "decision_seconds must be between 0.015 and 0.2, found 0.01"]),
+        ("[detector.spectral]\nmax_decision_seconds = 0.02\n", &["[detector.spectral]", "max_decision_seconds must be between decision_seconds (0.025) and 0.2, found 0.02"]),
         ("[detector]\nmax_decision_seconds = 0.05\n", &["max_decision_seconds is a setting of the spectral method: put it in [detector.spectral]"]),
         // A method's settings live in its own table, and only the configured method's
         // table may be there.
