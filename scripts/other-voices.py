@@ -28,6 +28,7 @@ import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "shared" / "devsets"))
+sys.path.insert(0, str(HERE))  # exact_copies.py, also when loaded from another folder
 import build  # noqa: E402  (the development sets' generator)
 from exact_copies import sequences as copies_sequences  # noqa: E402
 
