@@ -14,6 +14,8 @@
 #   six more, and the exact-copies protocol for their words);
 # - exact-real: scripts/exact-real.py, the exact-copies protocol for the real sets'
 #   own takes;
+# - other-loops: scripts/other-loops.py, the beats protocol with the templates cut from
+#   each other AGH loop and rsalazar recording (the dev sets' own choices included);
 # - take2, take3: scripts/other-takes.py, the real sets enrolled from another take;
 # - takes1-2, takes1-3: scripts/more-takes.py, the real sets enrolled from their first
 #   two or three takes (scored with scripts/with-more-takes.sh), and the same folders
@@ -49,6 +51,7 @@ rows=(
   "voices-more|six further voices|other-voices.py --more|voices-more|plain"
   "exact|exact copies of those twelve voices' words (the protocol of D5_exact)|other-voices.py --exact|exact|plain"
   "exact-real|exact copies of the real sets' own takes, bleed and room included (the protocol of D5_exact)|exact-real.py|exact-real|plain"
+  "other-loops|the real beats enrolled from each other loop: AGH's five starts, rsalazar's rec2, rec3 and rec4 (the dev sets' own among them)|other-loops.py|other-loops|plain"
   "take2|the real sets enrolled from each label's second take|other-takes.py 1|take2|plain"
   "take3|... from its third take|other-takes.py 2|take3|plain"
   "take1-of-2|the real sets, take 1 alone enrolling, scored on the takes after the second|more-takes.py 2, take 1 alone|takes2|plain"
@@ -93,6 +96,7 @@ make_folder() {  # name how folder
     voices-more) "$py" "$here/other-voices.py" --more "$out" ;;
     exact) "$py" "$here/other-voices.py" --exact "$out" ;;
     exact-real) "$py" "$here/exact-real.py" "$sets" "$out" ;;
+    other-loops) "$py" "$here/other-loops.py" "$out" ;;
     take2) "$py" "$here/other-takes.py" 1 "$out" ;;
     take3) "$py" "$here/other-takes.py" 2 "$out" ;;
     take1-of-2 | takes1-2) "$py" "$here/more-takes.py" 2 "$out" ;;
