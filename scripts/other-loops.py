@@ -47,7 +47,7 @@ def agh_from(out, start):
     for wav, truth in tests:
         y, _ = build.mono(wav)
         seqs.append((y, [(on, label, "", 1.0) for on, label in truth]))
-    folder = out / f"D2_beats_agh_from_{order[0][0].stem}"
+    folder = out / ("D2_beats_agh" if start == 0 else f"D2_beats_agh_from_{order[0][0].stem}")
     build.save_set(folder, patterns, {k: "impulse" for k in patterns}, seqs, sr0,
                    about="AGH pattern loops: templates from " + ", ".join(w.stem for w in sorted(used))
                          + "; seqs: " + ", ".join(w.stem for w, _ in tests))
@@ -97,10 +97,15 @@ def rsalazar_from(out, source):
     return folder
 
 
-def same_files(a, b):
-    names = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file() and p.name != "set.json")
-    theirs = sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file() and p.name != "set.json")
-    return names == theirs and all(filecmp.cmp(a / n, b / n, shallow=False) for n in names)
+def check_is_dev_set(folder, make):
+    """A set made here that is the dev set's own choice must be that set, file by file, as build.py makes it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        make(pathlib.Path(tmp))
+        theirs = pathlib.Path(tmp) / folder.name
+        names = sorted(p.relative_to(folder) for p in folder.rglob("*") if p.is_file() and p.name != "set.json")
+        their_names = sorted(p.relative_to(theirs) for p in theirs.rglob("*") if p.is_file() and p.name != "set.json")
+        if names != their_names or not all(filecmp.cmp(folder / n, theirs / n, shallow=False) for n in names):
+            sys.exit(f"other-loops.py: {folder} is not {folder.name} as build.py makes it")
 
 
 def main():
@@ -109,24 +114,14 @@ def main():
     out = pathlib.Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
     try:
-        starts = range(len(build.agh_loops()))
-        for start in starts:
+        for start in range(len(build.agh_loops())):
             folder = agh_from(out, start)
             if start == 0:
-                # The first start is the dev set: made again by the dev sets' own function, it must match.
-                with tempfile.TemporaryDirectory() as tmp:
-                    build.d2_agh(pathlib.Path(tmp))
-                    if not same_files(folder, pathlib.Path(tmp) / "D2_beats_agh"):
-                        sys.exit(f"other-loops.py: {folder} is not D2_beats_agh as build.py makes it")
-                folder.rename(out / "D2_beats_agh")
+                check_is_dev_set(folder, build.d2_agh)
         for source in (2, 3, 4):
             folder = rsalazar_from(out, source)
             if source == 2:
-                # rec2 is the dev set's own choice: it must match the dev set.
-                with tempfile.TemporaryDirectory() as tmp:
-                    build.d2_rsalazar(pathlib.Path(tmp))
-                    if not same_files(folder, pathlib.Path(tmp) / "D2_beats_rsalazar"):
-                        sys.exit(f"other-loops.py: {folder} is not D2_beats_rsalazar as build.py makes it")
+                check_is_dev_set(folder, build.d2_rsalazar)
     except build.BuildError as e:
         sys.exit(f"other-loops.py: {e}")
     print(f"other-loops.py: sets in {out}")
