@@ -29,6 +29,8 @@ import sys
 import numpy as np
 import soundfile
 
+from set_patterns import pattern_args
+
 BLOCK_SECONDS = 0.0029
 BLOCKS = 8
 FLOOR_DB = -30.0
@@ -39,11 +41,10 @@ def fail(message):
     sys.exit(2)
 
 
-def explain(binary, wav, patterns):
-    args = [binary, "analyze", str(wav), "--explain", "--format", "json"]
-    for name, path in patterns:
-        args += ["--pattern", f"{name}={path}"]
-    run = subprocess.run(args, capture_output=True, text=True)
+def explain(binary, set_dir, wav, patterns):
+    """The onsets `analyze --explain` considers in `wav`, the set's patterns enrolled as run.sh enrols them."""
+    args = [binary, "analyze", str(wav.resolve()), "--explain", "--format", "json", *patterns]
+    run = subprocess.run(args, cwd=set_dir, capture_output=True, text=True)
     if run.returncode != 0:
         fail(f"analyze failed on {wav}: {run.stderr.strip()}")
     return json.loads(run.stdout)["onsets"]
@@ -73,27 +74,27 @@ def distance(a, b):
 def main():
     if len(sys.argv) < 3:
         fail("usage: envelope-at-placement.py ONOMATO_BIN SET_DIR...")
-    binary = sys.argv[1]
+    binary = str(pathlib.Path(sys.argv[1]).resolve())
     wrong, right = [], []
     confused = collections.defaultdict(list)
     for set_dir in map(pathlib.Path, sys.argv[2:]):
         try:
-            kinds = json.loads((set_dir / "set.json").read_text())["kinds"]
+            kinds, patterns = pattern_args(set_dir)
         except (OSError, ValueError, KeyError) as e:
             fail(f"{set_dir}/set.json: expected a dev set's set.json with kinds ({e})")
-        patterns = [(n, set_dir / "patterns" / f"{n}.wav") for n in kinds]
         takes = {}
-        for name, path in patterns:
-            if kinds[name] != "impulse":
+        for name, kind in kinds.items():
+            if kind != "impulse":
                 continue
+            path = set_dir / "patterns" / f"{name}.wav"
             samples, rate = mono(path)
-            placed = explain(binary, path, patterns)
+            placed = explain(binary, set_dir, path, patterns)
             takes[name] = envelope(samples, rate, placed[0]["time"] if placed else 0.005)
         for wav in sorted(set_dir.glob("seq_*.wav")):
             with open(wav.with_suffix(".csv")) as f:
                 truth = [(float(r["onset_s"]), r["label"]) for r in csv.DictReader(f)]
             samples, rate = mono(wav)
-            for onset in explain(binary, wav, patterns):
+            for onset in explain(binary, set_dir, wav, patterns):
                 best, second = onset["best"], onset["second"]
                 if onset["outcome"] != "fired" or onset["waited_for"] is not None:
                     continue
