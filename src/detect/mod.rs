@@ -8,6 +8,7 @@
 //! Runs on the caller's thread (the detector thread in the daemon). After construction,
 //! [`Detector::process`] allocates nothing, provided the caller's event vector has room.
 
+mod ablation;
 pub mod background;
 mod classify;
 mod context;

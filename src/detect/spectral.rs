@@ -82,6 +82,7 @@
 use std::ops::RangeInclusive;
 use std::sync::Arc;
 
+use super::ablation::Ablation;
 use super::background::BackgroundModel;
 use super::classify::{
     default_noise_over_floor, share_explained_over_tail, FiredInstance, Room, TrackParams, Tracked,
@@ -415,6 +416,8 @@ pub struct SpectralMatcher {
     /// The first look at the onset whose decision waits for more windows.
     waiting: Option<FirstLook>,
     gates: GateParams,
+    /// Mechanisms a measurement build turned off (none in any other build).
+    off: Ablation,
     /// The last onset that fired (sample), and how near an onset may be placed to it:
     /// the onset stage's `min_gap_seconds`.
     last_fired: Option<u64>,
@@ -664,6 +667,7 @@ impl SpectralMatcher {
     /// A matcher of `patterns` for input recorded at `input_rate` (resampled to
     /// `settings.sample_rate` before it arrives).
     pub fn new(patterns: Vec<Pattern>, settings: &DetectorSettings, input_rate: u32) -> Self {
+        let off = Ablation::from_env();
         let rate = f64::from(settings.sample_rate);
         let mut analyzer = Analyzer::new(rate);
         let carried = carried_top_hz(&mut analyzer, &patterns, settings, input_rate);
@@ -704,7 +708,9 @@ impl SpectralMatcher {
                 // it stands out of the noise, later when it does not. Both are enrolled.
                 let soft = first_block_within(&take.samples, analyzer.hop, SOFT_ONSET_RANGE_DB);
                 let soft_first = p.kind == PatternKind::Continuous
-                    && (onset.saturating_sub(soft) as f64) > SOFT_ONSET_GAP_SECONDS * rate;
+                    && (onset.saturating_sub(soft) as f64) > SOFT_ONSET_GAP_SECONDS * rate
+                    && !off.second_placement;
+                let quiet_room_onset = quiet_room_onset.filter(|_| !off.second_placement);
                 // An impulse is enrolled from where a quiet room places it too.
                 let starts: &[(usize, bool)] = match (soft_first, quiet_room_onset) {
                     (true, _) => &[(soft, true), (onset, false)],
@@ -801,7 +807,21 @@ impl SpectralMatcher {
         };
         let background_full = BackgroundModel::builtin().for_matcher(FEATURES, decision_frames);
         let gates = GateParams {
-            min_strength: settings.min_strength,
+            min_strength: if off.min_strength {
+                0.0
+            } else {
+                settings.min_strength
+            },
+            over_fired_score: if off.over_fired {
+                f32::INFINITY
+            } else {
+                GateParams::default().over_fired_score
+            },
+            background_margin: if off.background {
+                f32::INFINITY
+            } else {
+                GateParams::default().background_margin
+            },
             ..GateParams::default()
         };
         let templates_len = templates.len();
@@ -863,6 +883,7 @@ impl SpectralMatcher {
             ),
             waiting: None,
             gates,
+            off,
             last_fired: None,
             min_gap_samples: (onset_params.min_gap_seconds * rate) as u64,
             last_impulse: None,
@@ -1292,6 +1313,7 @@ impl SpectralMatcher {
             // late in its search and the second early in its own: once the first has
             // fired, the second is that sound again.
             if windows == 1
+                && !self.off.same_onset
                 && self
                     .last_fired
                     .is_some_and(|last| time_sample < last + self.min_gap_samples)
@@ -1419,7 +1441,11 @@ impl SpectralMatcher {
         let mut waited_for = (heard_windows > 1).then_some(Wait::OverTail);
         if let Some(q) = self.runner_up(pi) {
             let n = self.patterns.len();
-            let mut needed = self.separating[pi * n + q] as usize;
+            let mut needed = if self.off.pair_waits {
+                1
+            } else {
+                self.separating[pi * n + q] as usize
+            };
             let mut why = Wait::PairAlikeAtFirst;
             // Named by its features, not over a tail, where the features are the tail's.
             if needed < BETWEEN_TWO_WINDOWS && heard_windows == 1 && self.between_two(pi, q) {
@@ -1470,6 +1496,7 @@ impl SpectralMatcher {
         // it is set to: the user who turns it off wants hits right after talking found,
         // not talk.
         if outcome == Outcome::Background
+            && !self.off.second_look
             && after_background(&decision.evidence, &self.gates) == Outcome::Fired
             && self.patterns[decision.pattern].kind == PatternKind::Impulse
             && !decision.evidence.over_fired_impulse
@@ -1491,7 +1518,7 @@ impl SpectralMatcher {
             // What its first window looked like may have misled the gates; what came
             // before it is the guard's to judge, and a user who plays a take back while
             // talking turns the guard off.
-            if outcome != Outcome::SpeechGuard {
+            if outcome != Outcome::SpeechGuard && !self.off.copies {
                 self.copies.wait(time_sample);
             }
             return None;
@@ -1558,7 +1585,8 @@ impl SpectralMatcher {
     /// (`docs/speech-guard.md`).
     fn cover_stopped(&mut self, d: &Decision) {
         let evidence = &d.evidence;
-        if !matches!(d.outcome, Outcome::SpeechGuard | Outcome::MinStrength)
+        if self.off.cover_stopped
+            || !matches!(d.outcome, Outcome::SpeechGuard | Outcome::MinStrength)
             || evidence.below_threshold()
             || evidence.like_speech(&self.gates)
         {
@@ -1609,7 +1637,12 @@ impl SpectralMatcher {
         // An impulse found by the later placement of a take that a quiet room places
         // earlier began that much before where it was placed: its soft start was lost
         // under the room or the last sound's tail. It is dated there, as a copy is.
-        let began = time_sample.saturating_sub(self.templates[best_template].after_earlier);
+        let after_earlier = if self.off.dated_back {
+            0
+        } else {
+            self.templates[best_template].after_earlier
+        };
+        let began = time_sample.saturating_sub(after_earlier);
         let decided = self.decided(pi, began, strength, best_score);
         let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
@@ -1647,13 +1680,15 @@ impl SpectralMatcher {
             // Taught at once, for the next onsets; kept once the sound after it shows
             // it was not talk ([`Self::teach_due`]).
             let lesson = self.lesson(pi, time_sample, time_sample + take_length, d);
-            let taught = self
-                .tracked
-                .follow(pi, &lesson.instance(&self.patterns, &self.takes_agree));
-            if taught.learnt() {
-                self.lessons.push(lesson);
-            }
-            Some(taught)
+            (!self.off.tracking).then(|| {
+                let taught = self
+                    .tracked
+                    .follow(pi, &lesson.instance(&self.patterns, &self.takes_agree));
+                if taught.learnt() {
+                    self.lessons.push(lesson);
+                }
+                taught
+            })
         } else {
             None
         };
@@ -1780,6 +1815,11 @@ impl SpectralMatcher {
         if self.templates.is_empty() {
             return None;
         }
+        let rise_db = if self.off.quiet_before {
+            f32::INFINITY
+        } else {
+            rise_db
+        };
         // Only the bands that the stream, as its loudest frames so far show it, carries
         // too are compared.
         let stream_top = self
@@ -1816,12 +1856,14 @@ impl SpectralMatcher {
         let context = Evidence {
             rise_db,
             over_fired_impulse,
-            follows_unrecognised_sound: guard != Guard::Open,
-            continues_last_impulse: self.continues_last_impulse(
-                time_sample,
-                onset_frame,
-                self.pattern_scores[best].score,
-            ) || self.attack_after_soft_start(onset_frame, best),
+            follows_unrecognised_sound: guard != Guard::Open && !self.off.speech_guard,
+            continues_last_impulse: (!self.off.continuation
+                && self.continues_last_impulse(
+                    time_sample,
+                    onset_frame,
+                    self.pattern_scores[best].score,
+                ))
+                || (!self.off.soft_start_attack && self.attack_after_soft_start(onset_frame, best)),
             background_score: self.background_score,
             best_score: f32::NEG_INFINITY,
             best_is_impulse: false,
@@ -1952,6 +1994,7 @@ impl SpectralMatcher {
         let clear_instance = self.patterns[best].kind == PatternKind::Impulse
             && self.pattern_scores[best].score >= self.gates.over_fired_score;
         self.waits_a_window
+            && !self.off.over_tail
             && over_fired_impulse
             && rise_db < self.gates.pre_quiet_db
             && !clear_instance
@@ -1990,6 +2033,7 @@ impl SpectralMatcher {
     fn between_two(&self, pi: usize, q: usize) -> bool {
         let impulse = |p: usize| self.patterns[p].kind == PatternKind::Impulse;
         self.waits_a_window
+            && !self.off.between_two
             && impulse(pi)
             && impulse(q)
             && self.pattern_scores[q].score >= self.pattern_scores[pi].score - BETWEEN_TWO_GAP
@@ -2282,9 +2326,10 @@ impl SpectralMatcher {
         if after == 0 || count == 0 {
             return None;
         }
-        if let (Some(_), Some(gap)) = (
+        if let (Some(_), Some(gap), false) = (
             template.repeats_every,
             self.patterns[template.pattern].repeats_every,
+            self.off.repeated,
         ) {
             let since_attack = onset_frame.saturating_sub(last.last_attack_frame) as usize;
             if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack {
