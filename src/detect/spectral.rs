@@ -751,15 +751,6 @@ impl SpectralMatcher {
                         drawn_towards: None,
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
-                        after_earlier: match (second_placement, quiet_room_onset) {
-                            (false, Some(early))
-                                if p.kind == PatternKind::Impulse
-                                    && start >= early + decision_frames * analyzer.hop =>
-                            {
-                                (start - early) as u64
-                            }
-                            _ => 0,
-                        },
                         later_power,
                         later_energy,
                         repeats_every,
@@ -1072,9 +1063,7 @@ impl SpectralMatcher {
     /// frames (as many windows as the most alike pair of patterns waits for) and their
     /// shift, the frames the onset may be placed before its detection (the rise is
     /// looked for over 6 frames), and one window. An exact copy that only its waveform
-    /// finds ([`Copies`]) is decided later, once its take's span is in, and an impulse
-    /// dated back to its take's earlier placement (its soft start lost) by that much
-    /// more.
+    /// finds ([`Copies`]) is decided later, once its take's span is in.
     pub fn decision_delay_bound(&self) -> f64 {
         let frames =
             self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
@@ -1634,16 +1623,7 @@ impl SpectralMatcher {
         let take_length = self.templates[best_template].length_after_onset;
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
-        // An impulse found by the later placement of a take that a quiet room places
-        // earlier began that much before where it was placed: its soft start was lost
-        // under the room or the last sound's tail. It is dated there, as a copy is.
-        let after_earlier = if self.off.dated_back {
-            0
-        } else {
-            self.templates[best_template].after_earlier
-        };
-        let began = time_sample.saturating_sub(after_earlier);
-        let decided = self.decided(pi, began, strength, best_score);
+        let decided = self.decided(pi, time_sample, strength, best_score);
         let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
             // A held sound it replaces ends first (a stopped one that was followed as
@@ -1670,7 +1650,7 @@ impl SpectralMatcher {
         }
         self.last_impulse = (kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
-            span: (began, time_sample + take_length),
+            span: (time_sample, time_sample + take_length),
             onset_frame,
             strength,
             last_attack_frame: onset_frame,
