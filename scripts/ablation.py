@@ -32,7 +32,7 @@ RUN = os.path.join(HERE, "..", "..", "shared", "devsets", "run.sh")
 NAMES = [
     "quiet_before", "over_fired", "over_tail", "speech_guard", "cover_stopped",
     "continuation", "soft_start_attack", "repeated", "background", "second_look",
-    "min_strength", "pair_waits", "between_two", "copies", "tracking",
+    "min_strength", "pair_waits", "between_two", "copies", "tracking", "dated_back",
     "second_placement", "same_onset",
 ]
 # (column, folder under WORK_DIR); the dev sets are the first.

@@ -38,6 +38,8 @@ pub(super) struct Ablation {
     pub copies: bool,
     /// Tracking and the kept instances: the takes alone are compared.
     pub tracking: bool,
+    /// An impulse found by its take's later placement dated at the earlier.
+    pub dated_back: bool,
     /// A second placement of each take (an impulse's in a quiet room, a held sound's
     /// soft start) enrolled.
     pub second_placement: bool,
@@ -47,7 +49,7 @@ pub(super) struct Ablation {
 
 /// Every switch's name, in the order of the fields.
 #[cfg_attr(not(feature = "ablation"), allow(dead_code))]
-pub(super) const NAMES: [&str; 17] = [
+pub(super) const NAMES: [&str; 18] = [
     "quiet_before",
     "over_fired",
     "over_tail",
@@ -63,6 +65,7 @@ pub(super) const NAMES: [&str; 17] = [
     "between_two",
     "copies",
     "tracking",
+    "dated_back",
     "second_placement",
     "same_onset",
 ];
@@ -89,6 +92,7 @@ impl Ablation {
                 "between_two" => &mut off.between_two,
                 "copies" => &mut off.copies,
                 "tracking" => &mut off.tracking,
+                "dated_back" => &mut off.dated_back,
                 "second_placement" => &mut off.second_placement,
                 "same_onset" => &mut off.same_onset,
                 other => {

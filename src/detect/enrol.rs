@@ -39,6 +39,16 @@ pub(super) struct Template {
     /// Length of the take from its onset, samples: how long an instance is taken to
     /// last when judging the context of the next onset.
     pub(super) length_after_onset: u64,
+    /// How far this placement lies after the earlier one a quiet room gives the take,
+    /// samples, when that is at least the decision window's frames (an impulse's; 0
+    /// for that one, any closer and any other): an instance this template finds began
+    /// that much before where it was placed. Closer, the two templates pool mostly the
+    /// same frames, and which scores best says little about where an instance began.
+    pub(super) after_earlier: u64,
+    /// The mean power of the take's sound over those samples (its soft start) against
+    /// its mean power over the decision window from this placement: how loud a sound
+    /// must be before an instance's onset to have hidden that soft start.
+    pub(super) soft_start_share: f64,
     /// The take's own later sounds: pooled power spectra as `pooled_power`, and
     /// energy over the decision window, from every frame after the onset frame
     /// (`[k - 1]`: k frames after it) to the end of the take.
@@ -835,6 +845,8 @@ mod tests {
             drawn_towards: None,
             early_energy: t.early_energy,
             length_after_onset: take.len() as u64,
+            after_earlier: 0,
+            soft_start_share: 0.0,
             later_power: t.later_power,
             later_energy: t.later_energy,
             repeats_every: None,
@@ -855,6 +867,8 @@ mod tests {
             drawn_towards: None,
             early_energy: 0.0,
             length_after_onset: 0,
+            after_earlier: 0,
+            soft_start_share: 0.0,
             later_power: Vec::new(),
             later_energy: Vec::new(),
             repeats_every: None,

@@ -651,6 +651,12 @@ fn repeats_every(
 
 /// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
 /// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
+/// Mean power of `samples[from..to]` (clipped to its length; 0 when empty).
+fn mean_power(samples: &[f32], from: usize, to: usize) -> f64 {
+    let span = &samples[from.min(samples.len())..to.min(samples.len())];
+    span.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / span.len().max(1) as f64
+}
+
 fn pool_ring(frames: &[f32], capacity: usize, first: u64, count: usize, out: &mut [f32]) {
     let cap = capacity as u64;
     pool_power(
@@ -742,6 +748,19 @@ impl SpectralMatcher {
                             )
                         })
                         .flatten();
+                    let (after_earlier, soft_start_share) =
+                        match (second_placement, quiet_room_onset) {
+                            (false, Some(early))
+                                if p.kind == PatternKind::Impulse
+                                    && start >= early + decision_frames * analyzer.hop =>
+                            {
+                                let decision_len = decision_frames * analyzer.hop;
+                                let soft = mean_power(&take.samples, early, start);
+                                let after = mean_power(&take.samples, start, start + decision_len);
+                                ((start - early) as u64, soft / after.max(1e-20))
+                            }
+                            _ => (0, 0.0),
+                        };
                     templates.push(Template {
                         pattern: pi,
                         take: takes_so_far,
@@ -751,6 +770,8 @@ impl SpectralMatcher {
                         drawn_towards: None,
                         early_energy,
                         length_after_onset: (take.samples.len() - start) as u64,
+                        after_earlier,
+                        soft_start_share,
                         later_power,
                         later_energy,
                         repeats_every,
@@ -1063,7 +1084,9 @@ impl SpectralMatcher {
     /// frames (as many windows as the most alike pair of patterns waits for) and their
     /// shift, the frames the onset may be placed before its detection (the rise is
     /// looked for over 6 frames), and one window. An exact copy that only its waveform
-    /// finds ([`Copies`]) is decided later, once its take's span is in.
+    /// finds ([`Copies`]) is decided later, once its take's span is in, and an impulse
+    /// dated back to its take's earlier placement (its soft start lost) by that much
+    /// more.
     pub fn decision_delay_bound(&self) -> f64 {
         let frames =
             self.max_windows * self.decision_frames + MAX_SHIFT + PLACE_AFTER_FRAMES as usize + 6;
@@ -1623,7 +1646,30 @@ impl SpectralMatcher {
         let take_length = self.templates[best_template].length_after_onset;
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
-        let decided = self.decided(pi, time_sample, strength, best_score);
+        // An impulse found by the later placement of a take that a quiet room places
+        // earlier began that much before where it was placed when its soft start was
+        // lost under the room or the last sound's tail. It is dated there, as a copy
+        // is, when both say so: its own features chose that placement (over a fired
+        // word's tail they are mostly the tail's, and the take that scored best says
+        // nothing of where the sound began), and the sound there is at least as loud,
+        // against the instance's first window, as the take's soft start is against its
+        // own (quieter, nothing hid a soft start: the onset was placed on it, or it has
+        // none).
+        let template = &self.templates[best_template];
+        let after_earlier = if !self.off.dated_back
+            && template.after_earlier > 0
+            && !d.judged_over_tail
+            && self.hides_a_soft_start(
+                time_sample,
+                template.after_earlier,
+                template.soft_start_share,
+            ) {
+            template.after_earlier
+        } else {
+            0
+        };
+        let began = time_sample.saturating_sub(after_earlier);
+        let decided = self.decided(pi, began, strength, best_score);
         let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
             // A held sound it replaces ends first (a stopped one that was followed as
@@ -1650,7 +1696,7 @@ impl SpectralMatcher {
         }
         self.last_impulse = (kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
-            span: (time_sample, time_sample + take_length),
+            span: (began, time_sample + take_length),
             onset_frame,
             strength,
             last_attack_frame: onset_frame,
@@ -2214,6 +2260,16 @@ impl SpectralMatcher {
             .filter(|&n| n < self.consumed)
             .map(|n| f64::from(self.sample(n)).powi(2))
             .sum()
+    }
+
+    /// Whether the `span` samples before `time_sample` hold a sound whose mean power is
+    /// at least `share` of the decision window's from `time_sample`.
+    fn hides_a_soft_start(&self, time_sample: u64, span: u64, share: f64) -> bool {
+        let decision_len = (self.decision_frames * self.hop()) as f64;
+        let before: f64 = (time_sample.saturating_sub(span)..time_sample)
+            .map(|n| f64::from(self.sample(n)).powi(2))
+            .sum();
+        before / span as f64 >= share * self.decision_window_energy(time_sample) / decision_len
     }
 
     /// `energy`, of a window whose mean power spectrum is `power`, in the bands compared
