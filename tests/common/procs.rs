@@ -91,6 +91,30 @@ pub fn free_udp_port() -> u16 {
         .port()
 }
 
+/// Waits until some process has bound UDP `port` (IPv4 or IPv6), as the kernel lists
+/// it in /proc/net/udp and /proc/net/udp6.
+pub fn wait_udp_bound(port: u16, timeout: Duration) {
+    let hex = format!(":{port:04X}");
+    let bound = || {
+        ["/proc/net/udp", "/proc/net/udp6"].iter().any(|table| {
+            fs::read_to_string(table).is_ok_and(|text| {
+                text.lines()
+                    .skip(1)
+                    .filter_map(|line| line.split_whitespace().nth(1))
+                    .any(|local| local.ends_with(&hex))
+            })
+        })
+    };
+    let start = Instant::now();
+    while !bound() {
+        assert!(
+            start.elapsed() < timeout,
+            "no process bound UDP port {port} within {timeout:?}"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 /// One message as oscdump printed it.
 #[derive(Debug, Clone)]
 pub struct OscLine {
@@ -133,7 +157,9 @@ impl OscDump {
                 .stderr(Stdio::null()),
             "oscdump (liblo-tools)",
         );
-        std::thread::sleep(Duration::from_millis(200));
+        // A datagram sent before the receiver has bound its port is lost: wait until
+        // it has, however long a busy machine takes to start it.
+        wait_udp_bound(port, Duration::from_secs(10));
         Self {
             _child: child,
             out,
