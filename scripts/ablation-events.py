@@ -19,6 +19,9 @@ import os
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ablation import require_ablation_build  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 RUN = os.path.join(HERE, "..", "..", "shared", "devsets", "run.sh")
 WITH_TAKES = os.path.join(HERE, "with-more-takes.sh")
@@ -101,6 +104,7 @@ def main(argv):
     for folder, _ in folders:
         if not os.path.isdir(folder):
             sys.exit(f"ablation-events.py: no folder {folder}")
+    require_ablation_build(binary, "ablation-events.py")
     print(f"| folder | impulses found only with `{switch}` | only without | "
           "unmatched events with | without |")
     print("|---|---|---|---|---|")

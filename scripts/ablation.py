@@ -68,6 +68,20 @@ def score(binary, folder, switch, out_dir, reuse):
         return json.load(f)
 
 
+def require_ablation_build(binary, script):
+    """Exits unless `binary` reads ONOMATO_ABLATE (a build without the `ablation`
+    feature ignores it, and every switch would score as nothing turned off)."""
+    examples = os.path.join(HERE, "..", "examples")
+    probe = subprocess.run(
+        [binary, "analyze", os.path.join(examples, "beat.wav"),
+         "--pattern", "tick=" + os.path.join(examples, "patterns", "tick.wav")],
+        env=dict(os.environ, ONOMATO_ABLATE="no-such-mechanism"),
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if probe.returncode == 0 or "ONOMATO_ABLATE" not in probe.stderr:
+        sys.exit(f"{script}: {binary} ignores ONOMATO_ABLATE; build it with "
+                 "`cargo build --release --features ablation`")
+
+
 def positive(summary):
     return {k: v["f1"] for k, v in summary["sets"].items() if not v["negative"]}
 
@@ -143,6 +157,7 @@ def main(argv):
             sys.exit(f"ablation.py: no switch {s!r}; expected some of {', '.join(NAMES)}")
     if not os.access(binary, os.X_OK):
         sys.exit(f"ablation.py: {binary} is not an executable file")
+    require_ablation_build(binary, "ablation.py")
     folders = [sets] + [os.path.join(work, f) for _, f in FOLDERS]
     for folder in folders:
         if not os.path.isdir(folder):
