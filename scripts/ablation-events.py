@@ -20,10 +20,8 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ablation import require_ablation_build  # noqa: E402
+from ablation import HERE, RUN, require_ablation_build  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-RUN = os.path.join(HERE, "..", "..", "shared", "devsets", "run.sh")
 WITH_TAKES = os.path.join(HERE, "with-more-takes.sh")
 TOLERANCE = 0.05
 

@@ -649,14 +649,14 @@ fn repeats_every(
     lags.windows(2).map(|w| w[1] - w[0]).max()
 }
 
-/// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
-/// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
 /// Mean power of `samples[from..to]` (clipped to its length; 0 when empty).
 fn mean_power(samples: &[f32], from: usize, to: usize) -> f64 {
     let span = &samples[from.min(samples.len())..to.min(samples.len())];
     span.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>() / span.len().max(1) as f64
 }
 
+/// Pools `count` frames from frame `first` of the ring `frames` (`capacity` frames of
+/// `BANDS` dB values) into one mean power spectrum, `out` ([`pool_power`]).
 fn pool_ring(frames: &[f32], capacity: usize, first: u64, count: usize, out: &mut [f32]) {
     let cap = capacity as u64;
     pool_power(
@@ -2265,11 +2265,18 @@ impl SpectralMatcher {
     /// Whether the `span` samples before `time_sample` hold a sound whose mean power is
     /// at least `share` of the decision window's from `time_sample`.
     fn hides_a_soft_start(&self, time_sample: u64, span: u64, share: f64) -> bool {
-        let decision_len = (self.decision_frames * self.hop()) as f64;
-        let before: f64 = (time_sample.saturating_sub(span)..time_sample)
-            .map(|n| f64::from(self.sample(n)).powi(2))
-            .sum();
-        before / span as f64 >= share * self.decision_window_energy(time_sample) / decision_len
+        let decision_len = (self.decision_frames * self.hop()) as u64;
+        self.mean_power_between(time_sample.saturating_sub(span), time_sample)
+            >= share * self.mean_power_between(time_sample, time_sample + decision_len)
+    }
+
+    /// Mean power of the stream's samples `[from, to)`, of those the ring still holds
+    /// and has received (0 when none).
+    fn mean_power_between(&self, from: u64, to: u64) -> f64 {
+        let lo = from.max(self.consumed.saturating_sub(self.samples.len() as u64));
+        let hi = to.min(self.consumed);
+        let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
+        energy / hi.saturating_sub(lo).max(1) as f64
     }
 
     /// `energy`, of a window whose mean power spectrum is `power`, in the bands compared
@@ -2626,8 +2633,7 @@ impl SpectralMatcher {
             .max(self.consumed.saturating_sub(self.samples.len() as u64));
         let hi = end_sample.min(self.consumed);
         // Mean power over the held sound (its most recent half second when longer).
-        let energy: f64 = (lo..hi).map(|n| f64::from(self.sample(n)).powi(2)).sum();
-        let power = energy / (hi.saturating_sub(lo)).max(1) as f64;
+        let power = self.mean_power_between(lo, hi);
         // Both powers in the bands compared, as an impulse's strength is: each by its
         // share there in its mean frame (the sound's over the same span, the takes' after
         // their onsets).
