@@ -75,6 +75,7 @@ rows=(
   "mp3-64|decoded from MP3 at 64 kbit/s|mp3 64|mp3-64|plain"
   "mp3-32|... at 32 kbit/s (a voice call)|mp3 32|mp3-32|plain"
   "quieter|the sequences 15 dB quieter than the takes (performed further from the microphone than enrolled)|gain -15 sequences|gain-15s|plain"
+  "louder|the sequences 12 dB louder than the takes, clipped at full scale (performed closer than enrolled, an input gain set too high)|gain 12 sequences|gain12s|plain"
   "higher|the sequences a semitone higher than the takes (a voice that sits higher than when it enrolled)|pitch 100|pitch100|plain"
   "lower|... a semitone lower|pitch -100|pitch-100|plain"
   "silence|0.5 s of digital silence before each sequence|silence 0.5|silence|plain"
@@ -85,6 +86,10 @@ rows=(
   "lowpass-seq|the sequences alone low-passed so (takes from a good microphone)|lowpass 6300 sequences|lowpass-seq|plain"
   "talk-30|someone else talking 30 dB under the sequences' peaks (an unheard voice reading; enrolled in quiet)|talk voices/N_speech_espeak_klatt/seq_00.wav -30|talk30|plain"
   "talk-20|... 20 dB under them|talk voices/N_speech_espeak_klatt/seq_00.wav -20|talk20|plain"
+  "compress-2|through a gentle compressor, 2:1 over -20 dB, full scale kept (a voice chain's)|compress 2 -20|compress2|plain"
+  "compress-4|... 4:1 over -30 dB (a streaming chain's)|compress 4 -30|compress4|plain"
+  "compress-4-seq|the sequences alone so (enrolled without it)|compress 4 -30 sequences|compress4s|plain"
+  "agc|... 8:1 over -40 dB, the room's noise 35 dB up (an automatic gain control's levelling)|compress 8 -40|compress8|plain"
 )
 
 make_folder() {  # name how folder

@@ -18,6 +18,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR head SECONDS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gate OVER_DB [HOLD_SECONDS]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR talk FILE LEVEL_DB
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR compress RATIO THRESHOLD_DB [sequences]
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100);
@@ -68,6 +69,11 @@
 # the sequence's own peak (a set recorded quietly hears the talk as quietly), mixed at
 # equal weight as the noise is; the takes as they were (enrolled in quiet). The speech
 # sets get it too, so their false events count what the talk fires.
+# compress: a compressor on every file, as a streaming chain, a voice-call app or a
+# laptop's input sets one before the detector (sox's compand: 5 ms attack, 100 ms
+# release, a 6 dB soft knee, no look-ahead): over THRESHOLD_DB each decibel in gives
+# 1/RATIO out, and the output is raised so that full scale stays full scale, which
+# raises the room's noise and the sounds' tails as much; `sequences` as for rate.
 # All repeatable (sox -R).
 set -euo pipefail
 usage() {
@@ -202,7 +208,22 @@ case $kind in
         [[ $level_db =~ ^-[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: talk $talk_file $level_db: expected decibels under the sequence's peak, such as -20" >&2; exit 2; }
         added="$(basename "$talk_file") under the sequences, its peaks $level_db dB under theirs, the takes as they were"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate or talk" >&2; exit 2 ;;
+    compress)
+        [ $# -ge 2 ] && [ $# -le 3 ] || usage
+        ratio=$1 threshold_db=$2 which=${3:-all}
+        [[ $ratio =~ ^[0-9]+(\.[0-9]+)?$ ]] && awk -v r="$ratio" 'BEGIN { exit !(r >= 1) }' \
+            || { echo "room-sets.sh: compress $ratio: expected a ratio of at least 1, such as 4" >&2; exit 2; }
+        [[ $threshold_db =~ ^-[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: compress $ratio $threshold_db: expected a threshold in decibels under full scale, such as -30" >&2; exit 2; }
+        case $which in
+            all) added="every file through a $ratio:1 compressor over $threshold_db dB, full scale kept" ;;
+            sequences) added="the sequences through a $ratio:1 compressor over $threshold_db dB, full scale kept, the takes as they were" ;;
+            *) echo "room-sets.sh: compress $ratio $threshold_db $which: expected nothing or 'sequences' after the threshold" >&2; exit 2 ;;
+        esac
+        # Full scale in comes out at threshold * (1 - 1/ratio); the make-up gain lifts it back.
+        makeup_db=$(awk -v r="$ratio" -v t="$threshold_db" 'BEGIN { printf "%.3f", -t * (1 - 1 / r) }')
+        compand=(compand 0.005,0.1 "6:-120,-120,$threshold_db,$threshold_db,0,-$makeup_db" "$makeup_db")
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate, talk or compress" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -317,6 +338,8 @@ PY
         elif [ "$kind" = mp3 ]; then
             ffmpeg -loglevel error -y -i "$wav" -c:a libmp3lame -b:a "${kbits}k" "$tmp/coded.mp3"
             ffmpeg -loglevel error -y -i "$tmp/coded.mp3" -ac 1 -c:a pcm_s16le "$out/$name/$rel"
+        elif [ "$kind" = compress ]; then
+            sox -R -V1 "$wav" "$out/$name/$rel" "${compand[@]}"
         elif [ "$kind" = pitch ]; then
             sox -R -V1 "$wav" "$out/$name/$rel" pitch "$cents"
         elif [ "$kind" = dc ]; then
