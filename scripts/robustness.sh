@@ -66,6 +66,8 @@ rows=(
   "room-1.32s|a room of RT60 1.32 s (bare, hard walls)|reverb 50|room50|plain"
   "room-0.47s-dry-takes|enrolled dry, performed in the 0.47 s room|reverb 25 100 sequences|room25s|plain"
   "room-1.32s-dry-takes|enrolled dry, performed in the 1.32 s room|reverb 50 100 sequences|room50s|plain"
+  "louder-room|pink noise 28 dB under full scale, from 2 s into each sequence on (a fan switched on while the performer goes on; enrolled in quiet)|louder pinknoise -28 2|louder28|plain"
+  "much-louder-room|... 22 dB under full scale|louder pinknoise -22 2|louder22|plain"
   "brown|brown noise (rumble) 30 dB under full scale|noise brownnoise -30|brown|plain"
   "pink|pink noise 40 dB under full scale|noise pinknoise -40|pink|plain"
   "pink-takes|enrolled in that pink noise, performed in quiet (the takes alone noisy)|noise pinknoise -40 takes|pink-takes|plain"

@@ -19,6 +19,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gate OVER_DB [HOLD_SECONDS]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR talk FILE LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR compress RATIO THRESHOLD_DB [sequences]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR louder TYPE LEVEL_DB AT_SECONDS
 #     bash ../shared/devsets/run.sh target/release/onomato OUT_DIR
 #
 # reverb: sox's reverb, REVERBERANCE and ROOM_SCALE its percentages (default 50, 100);
@@ -73,7 +74,13 @@
 # laptop's input sets one before the detector (sox's compand: 5 ms attack, 100 ms
 # release, a 6 dB soft knee, no look-ahead): over THRESHOLD_DB each decibel in gives
 # 1/RATIO out, and the output is raised so that full scale stays full scale, which
-# raises the room's noise and the sounds' tails as much; `sequences` as for rate.
+# raises the room's noise and the sounds' tails as much; it starts settled on a quiet
+# input (a compressor that has run before the stream begins: sox's default, settled on
+# full scale, would make each file's room swell by the make-up gain over its first
+# 0.4 s); `sequences` as for rate.
+# louder: sox's TYPE noise at LEVEL_DB (as for noise) added to each sequence from
+# AT_SECONDS on, faded in over 0.3 s (a fan switched on, a window opened on a street:
+# a room that gets louder for good while the performer goes on); the takes as they were.
 # All repeatable (sox -R).
 set -euo pipefail
 usage() {
@@ -221,9 +228,20 @@ case $kind in
         esac
         # Full scale in comes out at threshold * (1 - 1/ratio); the make-up gain lifts it back.
         makeup_db=$(awk -v r="$ratio" -v t="$threshold_db" 'BEGIN { printf "%.3f", -t * (1 - 1 / r) }')
-        compand=(compand 0.005,0.1 "6:-120,-120,$threshold_db,$threshold_db,0,-$makeup_db" "$makeup_db")
+        compand=(compand 0.005,0.1 "6:-120,-120,$threshold_db,$threshold_db,0,-$makeup_db" "$makeup_db" -120)
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate, talk or compress" >&2; exit 2 ;;
+    louder)
+        [ $# -eq 3 ] || usage
+        noise_type=$1 level_db=$2 at=$3 which=sequences
+        case $noise_type in
+            whitenoise | pinknoise | brownnoise) ;;
+            *) echo "room-sets.sh: louder $noise_type: expected whitenoise, pinknoise or brownnoise" >&2; exit 2 ;;
+        esac
+        [[ $level_db =~ ^-[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: louder $noise_type $level_db: expected decibels under full scale, such as -28" >&2; exit 2; }
+        [[ $at =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: louder $noise_type $level_db $at: expected the seconds into each sequence where the noise begins, such as 2" >&2; exit 2; }
+        added="$noise_type, peaks $level_db dB, from $at s into each sequence, the takes as they were"
+        ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate, talk, compress or louder" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -371,6 +389,12 @@ PY
             if [ "$kind" = noise ]; then
                 sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
                     synth "$seconds" "$noise_type" vol "$level_db" dB
+            elif [ "$kind" = louder ]; then
+                # As long as the sequence from AT_SECONDS (at least a hundredth of a
+                # second, so that sox has a noise to make), silence before it.
+                after=$(awk -v d="$seconds" -v a="$at" 'BEGIN { r = d - a; print (r > 0.01 ? r : 0.01) }')
+                sox -R -V1 -n -r "$rate" -c 1 -b 32 -e floating-point "$tmp/noise.wav" \
+                    synth "$after" "$noise_type" vol "$level_db" dB fade t 0.3 pad "$at" 0 trim 0 "$seconds"
             elif [ "$kind" = talk ]; then
                 # Repeated whole until it is as long as the file, then cut to it.
                 repeats=$(awk -v a="$seconds" -v b="$talk_seconds" 'BEGIN { print int(a / b) }')

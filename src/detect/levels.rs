@@ -1,7 +1,8 @@
 //! The level stage: how far the sound of each frame stands out of the room's noise.
 //! Three floors follow the room, each as the onset stage's band floors do (towards a
 //! quieter frame quickly, upwards slowly, and after digital silence catching up with
-//! the room as fast as they fall): under the frame's level as the analyser gives it (the
+//! the room as fast as they fall), and never under the quietest their level has been
+//! over the last `ROOM_WINDOW_SECONDS` (a room that got louder for good): under the frame's level as the analyser gives it (the
 //! room's noise for placing an onset on the samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
@@ -14,6 +15,7 @@
 
 use super::features::HOP_SECONDS;
 use super::onset::OnsetParams;
+use super::recent_min::RecentMinimum;
 
 /// The level of a frame without sound, dB.
 pub(super) const SILENT_DB: f32 = -120.0;
@@ -30,6 +32,17 @@ pub(super) const SILENT_DB: f32 = -120.0;
 /// they do, 7 and 8 alike, longer lets more speech through, half a period (10 ms) does
 /// not (`docs/rooms.md`, "Mains hum").
 const PERIOD_HOPS: usize = 7;
+
+/// A floor is never under the quietest its level has been over this long: a room that
+/// gets louder for good (a fan switched on, a window opened on a street) is sound over
+/// floors that rise at the onset stage's 3 dB/s for as long as its step takes at that
+/// pace (7 s for 20 dB), and every gate that measures sound over them stops the
+/// sounds made in it; over this window it is the room within 2-2.5 s, whatever its
+/// step. Longer than a held sound or a phrase of speech without a pause, which must
+/// stay sound over the room. Swept, with the onset stage's band floors given the same
+/// window or not (they are not: there it let real speech through), in `docs/rooms.md`,
+/// "A room that gets louder": shorter windows lift the floors under running speech.
+const ROOM_WINDOW_SECONDS: f64 = 3.0;
 
 /// The level of the sound in a frame of `level_db`, over a room whose noise is at
 /// `floor_db`: the frame's power less twice the noise's, in dB (`SILENT_DB` when that
@@ -175,6 +188,9 @@ pub(super) struct Levels {
     resumed_at: Option<u64>,
     /// The floors were set by [`Self::prime`].
     primed: bool,
+    /// The quietest of each floor's level (noise, heard, period) over the last
+    /// `ROOM_WINDOW_SECONDS`: a floor is never under it.
+    recent: RecentMinimum,
 }
 
 impl Levels {
@@ -197,6 +213,7 @@ impl Levels {
             room_before_silence_db: SILENT_DB,
             resumed_at: None,
             primed: false,
+            recent: RecentMinimum::new(3, (ROOM_WINDOW_SECONDS / HOP_SECONDS).round() as usize),
         }
     }
 
@@ -304,6 +321,20 @@ impl Levels {
         } else {
             period_db
         };
+        for (c, (floor, level)) in [
+            (&mut self.noise_floor_db, frame_db),
+            (&mut self.heard_floor_db, heard_db),
+            (&mut self.period_floor_db, period_db),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            self.recent.push(c, level);
+            if let Some(quietest) = self.recent.over_window(c) {
+                *floor = floor.max(quietest);
+            }
+        }
+        self.recent.end_frame();
         self.frames += 1;
         FrameLevels {
             sound: sound_level_db(heard_db, self.heard_floor_db),
@@ -345,6 +376,36 @@ mod tests {
                 assert_eq!(l.sound, SILENT_DB, "{from}-{to} s: {l:?}");
                 assert_eq!(l.rise, SILENT_DB, "{from}-{to} s: {l:?}");
             }
+        }
+    }
+
+    /// A room that gets 20 dB louder for good is the room within the window; a tone
+    /// held over it for as long as a held sound is, is sound over it all along.
+    #[test]
+    fn a_room_that_gets_louder_is_the_room_within_its_window_and_a_held_tone_is_not() {
+        let n = |s: f64| (s * RATE) as usize;
+        let mut x = crate::detect::white_noise(n(1.0), 0.003, 5);
+        x.extend(crate::detect::white_noise(n(8.0), 0.03, 6));
+        // A 1.5 s tone 20 dB over the louder room, from 6 s.
+        for (k, v) in x[n(6.0)..n(7.5)].iter_mut().enumerate() {
+            *v += 0.3 * (2.0 * std::f64::consts::PI * 500.0 * k as f64 / RATE).sin() as f32;
+        }
+        let levels = levels_of(&x);
+        let frame = |s: f64| (s * RATE) as usize / HOP;
+        // At 3 dB a second the floors would still lie 10 dB under the room 3.5 s after
+        // its step; the window (and a quarter of it more, at most) lifts them to it.
+        let window = ROOM_WINDOW_SECONDS;
+        assert!(
+            levels[frame(3.5)].sound > SILENT_DB,
+            "{:?}",
+            levels[frame(3.5)]
+        );
+        for l in &levels[frame(1.0 + 1.25 * window + 0.1)..frame(6.0) - WIN / HOP] {
+            assert_eq!(l.sound, SILENT_DB, "{l:?}");
+            assert_eq!(l.rise, SILENT_DB, "{l:?}");
+        }
+        for l in &levels[frame(6.0)..frame(7.5) - WIN / HOP] {
+            assert!(l.sound > l.heard - 1.0, "{l:?}");
         }
     }
 

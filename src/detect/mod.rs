@@ -25,6 +25,7 @@ pub mod onset;
 mod passband;
 mod pitch;
 mod place;
+mod recent_min;
 pub mod spectral;
 mod syllable;
 pub mod waveform;
