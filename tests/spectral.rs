@@ -1831,11 +1831,11 @@ fn a_word_too_faint_to_fire_does_not_stop_the_louder_one_after_it() {
 }
 
 /// A room that gets louder for good while the performer goes on (a fan switched on, a
-/// window opened on a street): white noise from 2 s on, at twice the sequence's RMS
-/// (some 45 dB over the room before it). The gates measure each sound over the room's
-/// noise, whose floors rise at 3 dB a second so that no sound lifts them: at that pace
-/// alone they reach such a step 15 s later, and until then the louder room is sound
-/// before each hit (onset F1 0.73 from 6 s on). They follow it within their window
+/// window opened on a street): white noise from 2 s on, at twice the sequence's RMS,
+/// where the room before it was light noise. The gates measure each sound over the
+/// room's noise, whose floors rise at 3 dB a second so that no sound lifts them: at
+/// that pace alone they take many seconds to reach such a step, and until then the
+/// louder room is sound before each hit (onset F1 0.73 from 6 s on). They follow it within their window
 /// (`levels::ROOM_WINDOW_SECONDS`, and a quarter of it more): from 6 s on the hits
 /// fire (onset F1 0.94, F1 0.85), what is lost being mostly "b" taken for "k" in
 /// noise that loud.

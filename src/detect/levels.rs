@@ -2,8 +2,9 @@
 //! Three floors follow the room, each as the onset stage's band floors do (towards a
 //! quieter frame quickly, upwards slowly, and after digital silence catching up with
 //! the room as fast as they fall), and never under the quietest their level has been
-//! over the last `ROOM_WINDOW_SECONDS` (a room that got louder for good): under the frame's level as the analyser gives it (the
-//! room's noise for placing an onset on the samples), under the frame's
+//! over the last `ROOM_WINDOW_SECONDS` (a room that got louder for good): under the
+//! frame's level as the analyser gives it (the room's noise for placing an onset on the
+//! samples), under the frame's
 //! power as the bands hear it (the sound level the speech guard and a held sound's
 //! strength read), and under the power of the last `PERIOD_HOPS` hops (the sound level
 //! the quiet-before rise and the spans of recognised sounds read). It also tells how a
@@ -37,7 +38,7 @@ const PERIOD_HOPS: usize = 7;
 /// gets louder for good (a fan switched on, a window opened on a street) is sound over
 /// floors that rise at the onset stage's 3 dB/s for as long as its step takes at that
 /// pace (7 s for 20 dB), and every gate that measures sound over them stops the
-/// sounds made in it; over this window it is the room within 2-2.5 s, whatever its
+/// sounds made in it; over this window it is the room within 3-3.75 s, whatever its
 /// step. Longer than a held sound or a phrase of speech without a pause, which must
 /// stay sound over the room. Swept, with the onset stage's band floors given the same
 /// window or not (they are not: there it let real speech through), in `docs/rooms.md`,
@@ -392,8 +393,8 @@ mod tests {
         }
         let levels = levels_of(&x);
         let frame = |s: f64| (s * RATE) as usize / HOP;
-        // At 3 dB a second the floors would still lie 10 dB under the room 3.5 s after
-        // its step; the window (and a quarter of it more, at most) lifts them to it.
+        // 2.5 s after the step the floors, rising 3 dB a second, still lie 12 dB under
+        // the room; the window (and a quarter of it more, at most) lifts them to it.
         let window = ROOM_WINDOW_SECONDS;
         assert!(
             levels[frame(3.5)].sound > SILENT_DB,
