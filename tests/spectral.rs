@@ -1867,3 +1867,31 @@ fn hits_after_the_room_gets_louder_are_found_within_seconds() {
         onomato::eval::render_text(&after)
     );
 }
+
+/// A held sound is followed over the room as its floors rise at their slow pace, never
+/// over floors that the room window lifts (`levels::ROOM_WINDOW_SECONDS`): a "hum" held
+/// for 8 s, longer than the window, is one sound to its end, not taken for the room
+/// once the window has heard nothing else.
+#[test]
+fn a_sound_held_longer_than_the_room_window_is_one_sound_to_its_end() {
+    let settings = spectral();
+    let take = buzz(RATE, 0.3, 180.0);
+    let pattern =
+        Pattern::from_samples("hum", PatternKind::Continuous, vec![take], &settings).unwrap();
+    let mut rec = vec![0.0f32; samples_for(9.0, RATE)];
+    place(
+        &mut rec,
+        &buzz(RATE, 8.0, 180.0),
+        samples_for(0.5, RATE),
+        0.8,
+    );
+    add_noise(&mut rec, 0.0005, 3);
+    let mut det = Detector::new(vec![pattern], &settings, RATE).unwrap();
+    let events = detect_in_blocks(&mut det, &rec, 256);
+    assert_eq!(events.len(), 1, "{events:#?}");
+    let end = events[0].end.expect("a held sound's end");
+    assert!(
+        (events[0].time - 0.5).abs() < 0.05 && (end - 8.5).abs() < 0.1,
+        "{events:#?}"
+    );
+}

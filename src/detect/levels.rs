@@ -39,8 +39,9 @@ const PERIOD_HOPS: usize = 7;
 /// floors that rise at the onset stage's 3 dB/s for as long as its step takes at that
 /// pace (7 s for 20 dB), and every gate that measures sound over them stops the
 /// sounds made in it; over this window it is the room within 3-3.75 s, whatever its
-/// step. Longer than a held sound or a phrase of speech without a pause, which must
-/// stay sound over the room. Swept, with the onset stage's band floors given the same
+/// step. Longer than a phrase of speech without a pause, which must stay sound over
+/// the room; a held sound, which can be held for longer, is followed over the floor
+/// that the window does not lift (`FrameLevels::held`). Swept, with the onset stage's band floors given the same
 /// window or not (they are not: there it let real speech through), in `docs/rooms.md`,
 /// "A room that gets louder": shorter windows lift the floors under running speech.
 const ROOM_WINDOW_SECONDS: f64 = 3.0;
@@ -67,6 +68,10 @@ pub(super) struct FrameLevels {
     pub(super) rise: f32,
     /// The frame's power as the bands hear it, dB.
     pub(super) heard: f32,
+    /// Over the floor under the same power that the window does not lift: what a held
+    /// sound is followed by, so that one held longer than the window is not taken for
+    /// the room.
+    pub(super) held: f32,
 }
 
 /// What the level stage takes of a frame ([`Levels::push`], [`Levels::prime`]).
@@ -172,15 +177,17 @@ pub(super) struct Levels {
     noise_floor_db: f32,
     /// Under the frame's power as the bands hear it.
     heard_floor_db: f32,
+    /// The same, never lifted by the window (`FrameLevels::held`).
+    held_floor_db: f32,
     /// Under the power of the last `PERIOD_HOPS` hops as the bands hear them.
     period_floor_db: f32,
     /// Energy of each of the last `PERIOD_HOPS` hops (by frame, modulo `PERIOD_HOPS`).
     hop_energies: [f64; PERIOD_HOPS],
     /// How many of `hop_energies` hold a hop's (all, once a period has come).
     period_hops_seen: usize,
-    /// Per floor (noise, heard, period): under the sound after digital silence, rising
+    /// Per floor (noise, heard, period, held): under the sound after digital silence, rising
     /// to it as fast as a floor falls until a frame meets it.
-    catching_up: [bool; 3],
+    catching_up: [bool; 4],
     /// The last frame was digital silence.
     after_silence: bool,
     /// The heard floor when the last digital silence began (the room as last heard),
@@ -206,10 +213,11 @@ impl Levels {
             frames: 0,
             noise_floor_db: 0.0,
             heard_floor_db: 0.0,
+            held_floor_db: 0.0,
             period_floor_db: 0.0,
             hop_energies: [0.0; PERIOD_HOPS],
             period_hops_seen: 0,
-            catching_up: [false; 3],
+            catching_up: [false; 4],
             after_silence: false,
             room_before_silence_db: SILENT_DB,
             resumed_at: None,
@@ -250,6 +258,7 @@ impl Levels {
             return false;
         }
         self.heard_floor_db = heard_floor_db;
+        self.held_floor_db = heard_floor_db;
         self.noise_floor_db = back(&|f| frames[f].frame_db);
         let hop = self.hop;
         self.period_floor_db = back(&|f| {
@@ -307,9 +316,10 @@ impl Levels {
                 (floor + rise).min(level.max(floor - fall))
             }
         };
-        let [noise, heard_catching, period] = &mut self.catching_up;
+        let [noise, heard_catching, period, held_catching] = &mut self.catching_up;
         self.noise_floor_db = follow(self.noise_floor_db, frame_db, noise);
         self.heard_floor_db = follow(self.heard_floor_db, heard_db, heard_catching);
+        self.held_floor_db = follow(self.held_floor_db, heard_db, held_catching);
         self.hop_energies[(self.frames % PERIOD_HOPS as u64) as usize] = newest_hop;
         self.period_hops_seen = (self.period_hops_seen + 1).min(PERIOD_HOPS);
         let period_power =
@@ -339,6 +349,7 @@ impl Levels {
         self.frames += 1;
         FrameLevels {
             sound: sound_level_db(heard_db, self.heard_floor_db),
+            held: sound_level_db(heard_db, self.held_floor_db),
             rise: sound_level_db(heard_db, self.period_floor_db),
             heard: heard_db,
         }

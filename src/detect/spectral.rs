@@ -371,6 +371,9 @@ pub struct SpectralMatcher {
     rise_levels: Vec<f32>,
     /// Per frame: its power as the bands hear it, dB ([`super::levels::FrameLevels::heard`]).
     heard_levels: Vec<f32>,
+    /// Per frame: its sound as a held sound is followed by it
+    /// ([`super::levels::FrameLevels::held`]).
+    held_levels: Vec<f32>,
     frame_capacity: usize,
     /// Frames computed.
     frame_count: u64,
@@ -860,6 +863,7 @@ impl SpectralMatcher {
             levels: vec![SILENT_DB; frame_capacity],
             rise_levels: vec![SILENT_DB; frame_capacity],
             heard_levels: vec![SILENT_DB; frame_capacity],
+            held_levels: vec![SILENT_DB; frame_capacity],
             frame_capacity,
             frame_count: 0,
             onsets: OnsetDetector::new(
@@ -1275,6 +1279,7 @@ impl SpectralMatcher {
         self.levels[slot] = frame_levels.sound;
         self.rise_levels[slot] = frame_levels.rise;
         self.heard_levels[slot] = frame_levels.heard;
+        self.held_levels[slot] = frame_levels.held;
 
         let centre = self.analyzer.frame_centre(f);
         self.context.follow(
@@ -2542,7 +2547,7 @@ impl SpectralMatcher {
         let bands = self.analyzer.cepstrum.bands();
         let level = match self.held_room[stage as usize] {
             Some(room) => sound_level_db(self.heard_levels[slot], room),
-            None => self.levels[slot],
+            None => self.held_levels[slot],
         };
         held.follow(
             f,
@@ -2569,7 +2574,7 @@ impl SpectralMatcher {
     fn held_loudest_since(&self, stage: Stage, first: u64) -> f32 {
         match self.held_room[stage as usize] {
             Some(room) => sound_level_db(self.loudest_since(&self.heard_levels, first), room),
-            None => self.loudest_since(&self.levels, first),
+            None => self.loudest_since(&self.held_levels, first),
         }
     }
 
