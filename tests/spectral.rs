@@ -1835,10 +1835,10 @@ fn a_word_too_faint_to_fire_does_not_stop_the_louder_one_after_it() {
 /// where the room before it was light noise. The gates measure each sound over the
 /// room's noise, whose floors rise at 3 dB a second so that no sound lifts them: at
 /// that pace alone they take many seconds to reach such a step, and until then the
-/// louder room is sound before each hit (onset F1 0.73 from 6 s on). They follow it within their window
-/// (`levels::ROOM_WINDOW_SECONDS`, and a quarter of it more): from 6 s on the hits
-/// fire (onset F1 0.94, F1 0.85), what is lost being mostly "b" taken for "k" in
-/// noise that loud.
+/// louder room is sound before each hit (onset F1 0.73 from 6 s on). They follow it
+/// within their window (`levels::ROOM_WINDOW_SECONDS`, and a quarter of it more): from
+/// 6 s on the hits fire (onset F1 0.94, F1 0.85), what is lost being mostly "b" taken
+/// for "k" in noise that loud.
 #[test]
 fn hits_after_the_room_gets_louder_are_found_within_seconds() {
     let settings = spectral();

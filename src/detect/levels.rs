@@ -37,13 +37,14 @@ const PERIOD_HOPS: usize = 7;
 /// A floor is never under the quietest its level has been over this long: a room that
 /// gets louder for good (a fan switched on, a window opened on a street) is sound over
 /// floors that rise at the onset stage's 3 dB/s for as long as its step takes at that
-/// pace (7 s for 20 dB), and every gate that measures sound over them stops the
-/// sounds made in it; over this window it is the room within 3-3.75 s, whatever its
-/// step. Longer than a phrase of speech without a pause, which must stay sound over
-/// the room; a held sound, which can be held for longer, is followed over the floor
-/// that the window does not lift (`FrameLevels::held`). Swept, with the onset stage's band floors given the same
-/// window or not (they are not: there it let real speech through), in `docs/rooms.md`,
-/// "A room that gets louder": shorter windows lift the floors under running speech.
+/// pace (7 s for 20 dB), and every gate that measures sound over them stops the sounds
+/// made in it; over this window it is the room within 3-3.75 s, whatever its step.
+/// Longer than a phrase of speech without a pause, which must stay sound over the room;
+/// a held sound, which can be held for longer, is followed over the floor that the
+/// window does not lift (`FrameLevels::held`). Swept, with the onset stage's band
+/// floors given the same window or not (they are not: there it let real speech
+/// through), in `docs/rooms.md`, "A room that gets louder": shorter windows lift the
+/// floors under running speech.
 const ROOM_WINDOW_SECONDS: f64 = 3.0;
 
 /// The level of the sound in a frame of `level_db`, over a room whose noise is at
@@ -185,8 +186,8 @@ pub(super) struct Levels {
     hop_energies: [f64; PERIOD_HOPS],
     /// How many of `hop_energies` hold a hop's (all, once a period has come).
     period_hops_seen: usize,
-    /// Per floor (noise, heard, period, held): under the sound after digital silence, rising
-    /// to it as fast as a floor falls until a frame meets it.
+    /// Per floor (noise, heard, period, held): under the sound after digital silence,
+    /// rising to it as fast as a floor falls until a frame meets it.
     catching_up: [bool; 4],
     /// The last frame was digital silence.
     after_silence: bool,
