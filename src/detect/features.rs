@@ -147,6 +147,8 @@ pub(super) struct Analyzer {
     window: Vec<f32>,
     fft_in: Vec<f32>,
     spectrum: Vec<Complex32>,
+    /// The last frame's power per spectral bin, |X|², each read by the two bands over it.
+    bin_power: Vec<f32>,
     scratch: Vec<Complex32>,
     bands: Vec<MelBand>,
     /// The bands compared, every one until [`Analyzer::compare_under`] says otherwise.
@@ -201,6 +203,7 @@ impl Analyzer {
             hop,
             fft_in: fft.make_input_vec(),
             spectrum: fft.make_output_vec(),
+            bin_power: vec![0.0; bins],
             scratch: fft.make_scratch_vec(),
             fft,
             window,
@@ -254,21 +257,23 @@ impl Analyzer {
     /// Log-mel frame (dB) of `samples` (`win` long) into `out`; returns the frame's
     /// level in dB (mean power).
     pub(super) fn frame(&mut self, samples: &[f32], out: &mut [f32]) -> f32 {
-        let mut power = 0.0f64;
         for ((d, &x), &w) in self.fft_in.iter_mut().zip(samples).zip(&self.window) {
             *d = x * w;
-            power += f64::from(x) * f64::from(x);
         }
+        let power = sum_of_squares(samples);
         let _ =
             self.fft
                 .process_with_scratch(&mut self.fft_in, &mut self.spectrum, &mut self.scratch);
+        for (p, c) in self.bin_power.iter_mut().zip(&self.spectrum) {
+            *p = c.norm_sqr();
+        }
         let mut loudest = f32::NEG_INFINITY;
         for ((band, o), p) in self.bands.iter().zip(out.iter_mut()).zip(&mut self.power) {
             let e: f32 = band
                 .weights
                 .iter()
-                .zip(&self.spectrum[band.first_bin..])
-                .map(|(w, c)| w * c.norm_sqr())
+                .zip(&self.bin_power[band.first_bin..])
+                .map(|(w, p)| w * p)
                 .sum();
             *p = e;
             *o = 10.0 * (e + 1e-12).log10();
@@ -279,6 +284,25 @@ impl Analyzer {
         }
         10.0 * ((power / samples.len() as f64) + 1e-12).log10() as f32
     }
+}
+
+/// The sum of the squares of `samples`, in f64, kept in four partial sums: one running
+/// sum is a chain of dependent additions that the processor cannot overlap, and this
+/// runs once or twice over every frame's window.
+pub(super) fn sum_of_squares(samples: &[f32]) -> f64 {
+    let mut sums = [0.0f64; 4];
+    let mut quads = samples.chunks_exact(4);
+    for q in &mut quads {
+        for (s, &x) in sums.iter_mut().zip(q) {
+            *s += f64::from(x) * f64::from(x);
+        }
+    }
+    let rest: f64 = quads
+        .remainder()
+        .iter()
+        .map(|&x| f64::from(x) * f64::from(x))
+        .sum();
+    (sums[0] + sums[1]) + (sums[2] + sums[3]) + rest
 }
 
 /// Pooled bands are floored this far below the loudest pooled band: the quiet bands'

@@ -96,8 +96,9 @@ use super::enrol::{
 };
 use super::explain::{HeldEndRecord, MatchedBy, OnsetRecord, SoundSpan, Taught, Wait};
 use super::features::{
-    features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity, top_hz,
-    Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS, WINDOW_SECONDS,
+    features_of_power, normalise, pool_power, present_bands, share_in_bands, similarity,
+    sum_of_squares, top_hz, Analyzer, Cepstrum, LowCut, BANDS, FEATURES, HOP_SECONDS,
+    WINDOW_SECONDS,
 };
 use super::fifo::Fifo;
 use super::gates::{after_background, decide, Evidence, GateParams, Outcome};
@@ -334,6 +335,14 @@ enum Stage {
 /// a mask, not a division, per sample.
 fn ring_slot(ring: &[f32], n: u64) -> usize {
     (n & (ring.len() as u64 - 1)) as usize
+}
+
+/// The `len` samples from stream position `start` on in `ring`, in order, as two
+/// slices (the second empty unless the ring wraps there).
+fn ring_slices(ring: &[f32], start: u64, len: usize) -> (&[f32], &[f32]) {
+    let first = ring_slot(ring, start);
+    let head = len.min(ring.len() - first);
+    (&ring[first..first + head], &ring[..len - head])
 }
 
 /// Streaming spectral matcher.
@@ -1196,19 +1205,15 @@ impl SpectralMatcher {
     fn analyse_frame(&mut self, end: u64) -> LevelInput {
         let win = self.analyzer.win;
         let start = end - win as u64;
-        for i in 0..win {
-            self.window_buf[i] = self.sample(start + i as u64);
-        }
+        let (first, second) = ring_slices(&self.samples, start, win);
+        self.window_buf[..first.len()].copy_from_slice(first);
+        self.window_buf[first.len()..win].copy_from_slice(second);
         let frame_db = self.analyzer.frame(&self.window_buf, &mut self.frame_buf);
         let newest = end - self.hop() as u64;
-        let (mut heard, mut newest_hop) = (0.0f64, 0.0f64);
-        for n in start..end {
-            let e = f64::from(self.heard_samples[ring_slot(&self.heard_samples, n)]).powi(2);
-            heard += e;
-            if n >= newest {
-                newest_hop += e;
-            }
-        }
+        let (first, second) = ring_slices(&self.heard_samples, start, win);
+        let heard = sum_of_squares(first) + sum_of_squares(second);
+        let (first, second) = ring_slices(&self.heard_samples, newest, (end - newest) as usize);
+        let newest_hop = sum_of_squares(first) + sum_of_squares(second);
         LevelInput {
             frame_db,
             heard,
