@@ -1450,6 +1450,30 @@ fn a_background_recording_longer_than_five_minutes_is_refused_by_name() {
     );
 }
 
+/// A background recording whose float samples hold a NaN is refused by name and
+/// frame, as a take is: its features would be no number.
+#[test]
+fn a_background_recording_holding_a_nan_is_refused_by_name() {
+    let dir = temp_dir("background-nan");
+    let bad = dir.join("talking.wav");
+    let mut talk = buzz(RATE, 1.0, 140.0);
+    talk[4_000] = f32::NAN;
+    write_wav_f32(&bad, &talk, RATE);
+    let settings = DetectorSettings {
+        background: vec![bad.clone()],
+        ..spectral()
+    };
+    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
+    let err = Detector::new(vec![impulse("pew", take, &settings)], &settings, RATE)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains(&bad.display().to_string()) && err.contains("not a number at frame 4000"),
+        "{err}"
+    );
+}
+
 /// A take that opens softly (40 ms of breath 21 dB under the buzz that follows) is
 /// placed on its soft start in a quiet room and on the buzz in a loud one, and enrolled
 /// from both. An instance in noise that hides its soft start is found by the later

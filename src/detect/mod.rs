@@ -176,6 +176,8 @@ pub enum DetectError {
     EmptyBackground(PathBuf),
     #[error("background recording '{}' is {seconds:.0} s long; expected at most {MAX_BACKGROUND_SECONDS:.0} s (a minute of talking is plenty): cut it", path.display())]
     LongBackground { path: PathBuf, seconds: f64 },
+    #[error("background recording '{}' holds a sample that is not a number at frame {frame}; expected samples between -1 and 1", path.display())]
+    BadBackgroundSample { path: PathBuf, frame: usize },
 }
 
 /// The longest background recording read: it is read whole and pooled while the
@@ -185,7 +187,7 @@ pub const MAX_BACKGROUND_SECONDS: f64 = 300.0;
 
 /// The samples (channel `select`, or the mix) and sample rate of the background
 /// recording `path`; one longer than [`MAX_BACKGROUND_SECONDS`] is refused before it is
-/// read.
+/// read, one that holds a sample that is not a number (a float file) once read.
 pub fn read_background(path: &Path, select: ChannelSelect) -> Result<(Vec<f32>, u32), DetectError> {
     let mut source = WavSource::open(path, select).map_err(DetectError::BackgroundAudio)?;
     let rate = source.sample_rate();
@@ -197,6 +199,12 @@ pub fn read_background(path: &Path, select: ChannelSelect) -> Result<(Vec<f32>, 
         });
     }
     let samples = source.read_all().map_err(DetectError::BackgroundAudio)?;
+    if let Some(frame) = samples.iter().position(|x| !x.is_finite()) {
+        return Err(DetectError::BadBackgroundSample {
+            path: path.to_path_buf(),
+            frame,
+        });
+    }
     Ok((samples, rate))
 }
 

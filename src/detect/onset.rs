@@ -336,7 +336,10 @@ impl OnsetDetector {
                 }
                 *fl = (*fl * rise).min(p.max(*fl * self.floor_fall));
             }
-            self.history[now + b] = 10.0 * (p + self.params.floor_weight * *fl).log10();
+            self.history[now + b] = p + self.params.floor_weight * *fl;
+        }
+        for h in &mut self.history[now..now + bands] {
+            *h = super::features::fast_db(*h);
         }
         // The mean over bands of each band's rise since `lag` frames ago, weighed.
         // Before the stream, the bands' level there (once primed).
