@@ -86,6 +86,8 @@ rows=(
   "rate-8k|every file at 8 kHz (a telephone)|rate 8000|rate8k|plain"
   "lowpass|every file low-passed at 6.3 kHz, at its own rate|lowpass 6300|lowpass|plain"
   "lowpass-seq|the sequences alone low-passed so (takes from a good microphone)|lowpass 6300 sequences|lowpass-seq|plain"
+  "highpass|every file through a 2-pole high-pass at 300 Hz (a thin microphone: a laptop's, a phone's, a voice call's)|highpass 300|highpass|plain"
+  "highpass-seq|the sequences alone high-passed so (enrolled through a full microphone)|highpass 300 sequences|highpass-seq|plain"
   "talk-30|someone else talking 30 dB under the sequences' peaks (an unheard voice reading; enrolled in quiet)|talk voices/N_speech_espeak_klatt/seq_00.wav -30|talk30|plain"
   "talk-20|... 20 dB under them|talk voices/N_speech_espeak_klatt/seq_00.wav -20|talk20|plain"
   "compress-2|through a gentle compressor, 2:1 over -20 dB, full scale kept (a voice chain's)|compress 2 -20|compress2|plain"

@@ -9,6 +9,7 @@
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR hum FREQUENCY LEVEL_DB
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR rate RATE [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR lowpass HZ [sequences]
+#     bash scripts/room-sets.sh SETS_DIR OUT_DIR highpass HZ [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR gain DB [sequences]
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR pitch CENTS
 #     bash scripts/room-sets.sh SETS_DIR OUT_DIR dc OFFSET
@@ -37,6 +38,10 @@
 # (enrolled through one microphone, heard through another).
 # lowpass: each file low-passed at HZ, at its own rate, 16-bit (a narrow source
 # resampled to a full rate on its way in); `sequences` as for rate.
+# highpass: each file through a 2-pole high-pass at HZ (12 dB an octave under it, sox's
+# highpass), 16-bit: a small microphone's thin bass, a low-cut switch, a voice call's
+# filter; `sequences` as for rate (enrolled through a full microphone, performed
+# through a thin one).
 # gain: each file DB louder (or quieter, negative), 16-bit: what passes full scale clips
 # (an input gain set too high); with `sequences`, the sequences alone, the takes as they
 # were (enrolled close to the microphone, performed further from it, or the other way).
@@ -134,13 +139,15 @@ case $kind in
         mix=$(IFS=,; echo "${weights[*]}")
         added="$hum_hz Hz hum and 7 harmonics, peaks $level_db dB"
         ;;
-    rate | lowpass)
+    rate | lowpass | highpass)
         [ $# -ge 1 ] && [ $# -le 2 ] || usage
         hz=$1 which=${2:-all}
         if [ "$kind" = rate ]; then
             expected="a sample rate in Hz, such as 16000" after="the rate" made="at $hz Hz"
-        else
+        elif [ "$kind" = lowpass ]; then
             expected="a frequency in Hz, such as 6300" after="the frequency" made="low-passed at $hz Hz"
+        else
+            expected="a frequency in Hz, such as 300" after="the frequency" made="high-passed at $hz Hz"
         fi
         case $hz in
             '' | *[!0-9]*) echo "room-sets.sh: $kind $hz: expected $expected" >&2; exit 2 ;;
@@ -241,7 +248,7 @@ case $kind in
         [[ $at =~ ^[0-9]+(\.[0-9]+)?$ ]] || { echo "room-sets.sh: louder $noise_type $level_db $at: expected the seconds into each sequence where the noise begins, such as 2" >&2; exit 2; }
         added="$noise_type, peaks $level_db dB, from $at s into each sequence, the takes as they were"
         ;;
-    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, gain, pitch, dc, mp3, silence, trim, head, gate, talk, compress or louder" >&2; exit 2 ;;
+    *) echo "room-sets.sh: room kind $kind: expected reverb, noise, hum, rate, lowpass, highpass, gain, pitch, dc, mp3, silence, trim, head, gate, talk, compress or louder" >&2; exit 2 ;;
 esac
 command -v sox > /dev/null || { echo "room-sets.sh: sox is needed (apt install sox)" >&2; exit 1; }
 [ -d "$src" ] || { echo "room-sets.sh: $src: no such folder of sets" >&2; exit 1; }
@@ -366,6 +373,8 @@ PY
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" gain "$gain_db"
         elif [ "$kind" = lowpass ]; then
             sox -R -V1 "$wav" -b 16 "$out/$name/$rel" sinc -"$hz"
+        elif [ "$kind" = highpass ]; then
+            sox -R -V1 "$wav" -b 16 "$out/$name/$rel" highpass -2 "$hz"
         elif [ "$kind" = rate ]; then
             sox -R -V1 "$wav" -b 16 -r "$hz" "$out/$name/$rel"
         elif [ "$kind" = silence ]; then

@@ -276,6 +276,7 @@ impl Analyzer {
                 .sum();
             *p = e;
         }
+        // In dB in a loop of its own, which runs in vector registers.
         for (o, p) in out.iter_mut().zip(&self.power) {
             *o = fast_db(p + 1e-12);
         }

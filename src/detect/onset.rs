@@ -338,6 +338,7 @@ impl OnsetDetector {
             }
             self.history[now + b] = p + self.params.floor_weight * *fl;
         }
+        // In dB in a loop of its own, which runs in vector registers.
         for h in &mut self.history[now..now + bands] {
             *h = super::features::fast_db(*h);
         }
