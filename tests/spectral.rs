@@ -1415,6 +1415,20 @@ fn a_sound_in_the_background_recording_no_longer_fires_and_the_pattern_still_doe
     assert_eq!(with, [false, true, false, true], "with it: {why}");
 }
 
+/// The error of a detector built with the background recording `path`, which must
+/// be refused.
+fn background_refused(path: &std::path::Path) -> String {
+    let settings = DetectorSettings {
+        background: vec![path.to_path_buf()],
+        ..spectral()
+    };
+    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
+    Detector::new(vec![impulse("pew", take, &settings)], &settings, RATE)
+        .err()
+        .expect("refused")
+        .to_string()
+}
+
 /// A background recording longer than `MAX_BACKGROUND_SECONDS` is refused by name
 /// before it is read (it would be read whole and pooled while the detector is built).
 #[test]
@@ -1434,15 +1448,7 @@ fn a_background_recording_longer_than_five_minutes_is_refused_by_name() {
         w.write_sample(0i16).unwrap();
     }
     w.finalize().unwrap();
-    let settings = DetectorSettings {
-        background: vec![long.clone()],
-        ..spectral()
-    };
-    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
-    let err = Detector::new(vec![impulse("pew", take, &settings)], &settings, RATE)
-        .err()
-        .expect("refused")
-        .to_string();
+    let err = background_refused(&long);
     assert!(
         err.contains(&long.display().to_string())
             && err.contains("301 s long; expected at most 300 s"),
@@ -1459,15 +1465,7 @@ fn a_background_recording_holding_a_nan_is_refused_by_name() {
     let mut talk = buzz(RATE, 1.0, 140.0);
     talk[4_000] = f32::NAN;
     write_wav_f32(&bad, &talk, RATE);
-    let settings = DetectorSettings {
-        background: vec![bad.clone()],
-        ..spectral()
-    };
-    let take = sweep(RATE, 0.150, 2200.0, 600.0, 0.080);
-    let err = Detector::new(vec![impulse("pew", take, &settings)], &settings, RATE)
-        .err()
-        .expect("refused")
-        .to_string();
+    let err = background_refused(&bad);
     assert!(
         err.contains(&bad.display().to_string()) && err.contains("not a number at frame 4000"),
         "{err}"
