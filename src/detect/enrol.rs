@@ -575,7 +575,7 @@ pub(super) fn take_placements(
         .filter(|&at| at.abs_diff(first) > hop);
     // The onsets after the first that rise out of the sound before them as a new
     // sound of a stream must (the quiet-before gate's rise, over its span).
-    let rises = |at: usize| {
+    let rises = |previous: usize, at: usize| {
         let loudest = |from: usize, to: usize| {
             powers[(from / block).min(powers.len() - 1)..=(to / block).min(powers.len() - 1)]
                 .iter()
@@ -583,17 +583,22 @@ pub(super) fn take_placements(
                 .fold(0.0f32, f32::max)
         };
         let span = |seconds: f64| (seconds * rate) as usize;
-        let before = loudest(
-            at.saturating_sub(span(ATTACK_BEFORE_SECONDS.0)),
-            at.saturating_sub(span(ATTACK_BEFORE_SECONDS.1)),
-        );
+        // From no earlier than half-way since the last placement: a sound repeated
+        // faster than the span (a fast chatter) would have its last attack in it, where
+        // a stream hears that attack's fired sound, not quiet.
+        let to = at.saturating_sub(span(ATTACK_BEFORE_SECONDS.1));
+        let from = at
+            .saturating_sub(span(ATTACK_BEFORE_SECONDS.0))
+            .max(previous + (at - previous) / 2)
+            .min(to);
+        let before = loudest(from, to);
         let after = loudest(at, at + block);
         after >= before * 10f32.powf(ATTACK_RISE_DB / 10.0)
     };
     let attacks: Vec<usize> = placed_quietly
         .iter()
         .enumerate()
-        .filter(|&(k, &at)| k == 0 || rises(at))
+        .filter(|&(k, &at)| k == 0 || rises(placed_quietly[k - 1], at))
         .map(|(_, &at)| at)
         .collect();
     TakePlacements {
@@ -809,28 +814,53 @@ mod tests {
         // One tone: one attack, however it fades.
         let tone_take = tone(rate, 150.0, 200.0, 0.5);
         assert_eq!(take_placements(&tone_take, &s, hop).attacks, vec![0]);
-        // Four clicks 100, 130 and 110 ms apart (a teeth chatter): bursts of noise dying
-        // away within 4 ms.
-        let mut chatter = Vec::new();
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        for gap_ms in [100.0, 130.0, 110.0, 40.0] {
-            let at = chatter.len();
-            for i in 0..(0.004 * rate) as usize {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                let white = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-                chatter.push((white * (-(i as f64) / (0.0008 * rate)).exp()) as f32);
-            }
-            chatter.resize(at + (gap_ms * rate / 1000.0) as usize, 0.0);
-        }
-        let attacks = take_placements(&chatter, &s, hop).attacks;
-        let ms: Vec<f64> = attacks.iter().map(|&a| a as f64 / rate * 1000.0).collect();
-        let clicks = [0.0, 100.0, 230.0, 340.0];
+        let attacks_ms = |gaps_ms: &[f64], room: f64| {
+            let attacks = take_placements(&clicks(rate, gaps_ms, room), &s, hop).attacks;
+            attacks
+                .iter()
+                .map(|&a| a as f64 / rate * 1000.0)
+                .collect::<Vec<_>>()
+        };
+        let placed_on = |ms: &[f64], at: &[f64]| {
+            ms.len() == at.len() && ms.iter().zip(at).all(|(m, c)| (m - c).abs() <= 3.0)
+        };
+        // Four clicks 100, 130 and 110 ms apart (a teeth chatter), in digital silence.
+        let ms = attacks_ms(&[100.0, 130.0, 110.0, 40.0], 0.0);
+        assert!(placed_on(&ms, &[0.0, 100.0, 230.0, 340.0]), "{ms:?}");
+        // Six clicks 45 ms apart (a fast chatter) in a room 60 dB down: each rises out
+        // of the quiet since the last, though the last lies within the 40 ms the rise
+        // looks back over.
+        let ms = attacks_ms(&[45.0; 6], 1e-3);
         assert!(
-            ms.len() == clicks.len() && ms.iter().zip(clicks).all(|(m, c)| (m - c).abs() <= 3.0),
+            placed_on(&ms, &[0.0, 45.0, 90.0, 135.0, 180.0, 225.0]),
             "{ms:?}"
         );
+    }
+
+    /// Clicks, bursts of noise dying away within 4 ms, each `gaps_ms` before the next,
+    /// over white noise of RMS `room`.
+    fn clicks(rate: f64, gaps_ms: &[f64], room: f64) -> Vec<f32> {
+        let mut x = Vec::new();
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut white = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for gap_ms in gaps_ms {
+            let at = x.len();
+            let end = at + (gap_ms * rate / 1000.0) as usize;
+            for i in 0..end - at {
+                let click = if i < (0.004 * rate) as usize {
+                    white() * (-(i as f64) / (0.0008 * rate)).exp()
+                } else {
+                    0.0
+                };
+                x.push((click + room * 3.46 * white()) as f32);
+            }
+        }
+        x
     }
 
     /// A template of pattern `pattern` from `take`, placed at its start.

@@ -575,6 +575,11 @@ struct FiredImpulse {
     /// one is): a sound of one sound repeated goes on, past its take's end too, while
     /// its attacks keep coming at its takes' pace ([`SpectralMatcher::continuation_lags`]).
     last_attack_frame: u64,
+    /// Its own first window: its features and its energy in the bands compared. A sound
+    /// repeated repeats this instance's attack, which may lie further from the take's
+    /// than its attacks lie from one another ([`SpectralMatcher::continues_last_impulse`]).
+    first_attack: [f32; FEATURES],
+    first_attack_energy: f64,
 }
 
 /// The later sound of the last fired impulse that an onset may be
@@ -1531,7 +1536,9 @@ impl SpectralMatcher {
                 score: decision.evidence.best_score,
             });
         }
-        if outcome == Outcome::Continuation {
+        // The last impulse's sound going on, whatever stopped it first (the quiet before
+        // a fast repetition holds the attack before it): a repeated sound goes on from it.
+        if decision.evidence.continues_last_impulse {
             if let Some(last) = &mut self.last_impulse {
                 last.last_attack_frame = onset_frame;
             }
@@ -1704,12 +1711,24 @@ impl SpectralMatcher {
                 time_sample + SPAN_STRETCH * take_length,
             );
         }
+        let mut first_attack = [0.0f32; FEATURES];
+        let mut first_attack_energy = 0.0;
+        if kind == PatternKind::Impulse && self.patterns[pi].repeats_every.is_some() {
+            self.pool_instance(onset_frame);
+            first_attack.copy_from_slice(&self.instance[..FEATURES]);
+            first_attack_energy = self.in_compared_bands(
+                self.decision_window_energy(time_sample),
+                &self.instance_power,
+            );
+        }
         self.last_impulse = (kind == PatternKind::Impulse).then_some(FiredImpulse {
             template: best_template,
             span: (began, time_sample + take_length),
             onset_frame,
             strength,
             last_attack_frame: onset_frame,
+            first_attack,
+            first_attack_energy,
         });
         let taught = if kind == PatternKind::Impulse {
             self.copies.fired(time_sample, pi);
@@ -2459,6 +2478,15 @@ impl SpectralMatcher {
             self.decision_window_energy(time_sample),
             &self.instance_power,
         );
+        // A sound repeated: an attack like its own first, as loud give or take as much.
+        if repeated {
+            let db = 10.0 * (energy.max(1e-20) / last.first_attack_energy.max(1e-20)).log10();
+            if similarity(&self.instance, &last.first_attack) >= CONTINUATION_SIMILARITY
+                && db.abs() <= CONTINUATION_DB
+            {
+                return true;
+            }
+        }
         let template = &self.templates[last.template];
         for k in lags {
             let Some(later) = template.window_at(k) else {
