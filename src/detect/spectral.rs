@@ -2443,7 +2443,8 @@ impl SpectralMatcher {
     /// level the impulse's strength predicts (within `CONTINUATION_DB`). Alike: a
     /// similarity of `CONTINUATION_SIMILARITY`, or at least the best pattern's score,
     /// so that the onset is no likelier a new sound than the last one going on (against
-    /// any window of a repeated sound's take, the former alone). The
+    /// any window of a repeated sound's take, the former alone; or, for a repeated
+    /// sound, as alike the instance's own first window, within as many dB of it). The
     /// second is what tells a take whose own first window scores low (a soft "f" that
     /// the room's noise half hides) from its louder later sound: an exact copy of a
     /// "fish" fired at 0.82, and the "sh" 28 ms on, 11 dB over the "f", fired again at
