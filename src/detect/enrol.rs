@@ -840,24 +840,25 @@ mod tests {
     /// Clicks, bursts of noise dying away within 4 ms, each `gaps_ms` before the next,
     /// over white noise of RMS `room`.
     fn clicks(rate: f64, gaps_ms: &[f64], room: f64) -> Vec<f32> {
-        let mut x = Vec::new();
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut white = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        for gap_ms in gaps_ms {
-            let at = x.len();
-            let end = at + (gap_ms * rate / 1000.0) as usize;
-            for i in 0..end - at {
-                let click = if i < (0.004 * rate) as usize {
-                    white() * (-(i as f64) / (0.0008 * rate)).exp()
-                } else {
-                    0.0
-                };
-                x.push((click + room * 3.46 * white()) as f32);
+        let ends: Vec<usize> = gaps_ms
+            .iter()
+            .scan(0.0, |at, gap_ms| {
+                *at += gap_ms;
+                Some((*at * rate / 1000.0) as usize)
+            })
+            .collect();
+        let len = ends.last().copied().unwrap_or(0);
+        // Uniform noise of RMS `room` is `room` times the root of 3 at its peaks.
+        let mut x = white_noise(len, (room * 3f64.sqrt()) as f32, 7);
+        let click_len = (0.004 * rate) as usize;
+        for (k, start) in std::iter::once(0)
+            .chain(ends)
+            .take(gaps_ms.len())
+            .enumerate()
+        {
+            let burst = white_noise(click_len, 0.5, 11 + k as u64);
+            for (i, b) in burst.iter().enumerate() {
+                x[start + i] += b * (-(i as f64) / (0.0008 * rate)).exp() as f32;
             }
         }
         x
