@@ -26,6 +26,7 @@
 #   kits' hits;
 # - mouth, mouth-differ: scripts/mouth-sounds.py, synthetic mouth sounds (a chatter of
 #   one click repeated, and one whose clicks differ);
+# - knocks: scripts/knock-sounds.py, synthetic knocks on wood, marble and ceramic;
 # - talk-30, talk-20: scripts/room-sets.sh ... talk, with the speech of the unheard
 #   voice en+klatt (the voices row's N_speech_espeak_klatt, under WORK_DIR) as the talk;
 # - every other row: scripts/room-sets.sh on the dev sets, with the arguments shown.
@@ -66,6 +67,7 @@ rows=(
   "noise-sweeps|the noise sweep of D1_noise_zingerbox (-60 to -35 dB), made of the AGH and both mitrank kits' hits|noise-sweeps.py|noise-sweeps|plain"
   "mouth|synthetic mouth sounds: a tongue click, a cheek pop, a lip smack and a teeth chatter of one click repeated 45 ms apart, each instance's resonances up to 7 % off its take's|mouth-sounds.py|mouth|plain"
   "mouth-differ|... the chatter's clicks each of its own resonances (no sound repeated)|mouth-sounds.py --chatter-clicks-differ|mouth-differ|plain"
+  "knocks|synthetic knocks on wood, marble and ceramic (struck plates; the ceramic rings 0.4 s), in the protocol of D6_knocks: rhythms at 150 bpm and eighths at 200 bpm included|knock-sounds.py|knocks|plain"
   "room-0.47s|a room of RT60 0.47 s (an office), takes and sequences|reverb 25|room25|plain"
   "room-1.32s|a room of RT60 1.32 s (bare, hard walls)|reverb 50|room50|plain"
   "room-0.47s-dry-takes|enrolled dry, performed in the 0.47 s room|reverb 25 100 sequences|room25s|plain"
@@ -126,6 +128,7 @@ make_folder() {  # name how folder
     noise-sweeps) "$py" "$here/noise-sweeps.py" "$out" ;;
     mouth) "$py" "$here/mouth-sounds.py" "$out" ;;
     mouth-differ) "$py" "$here/mouth-sounds.py" "$out" --chatter-clicks-differ ;;
+    knocks) "$py" "$here/knock-sounds.py" "$out" ;;
     talk-30 | talk-20)
       make_folder voices other-voices.py voices
       # shellcheck disable=SC2206  # talk FILE (under WORK_DIR) LEVEL_DB, word by word
