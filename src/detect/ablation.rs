@@ -43,7 +43,7 @@ pub(super) struct Ablation {
     /// A second placement of each take (an impulse's in a quiet room, a held sound's
     /// soft start) enrolled.
     pub second_placement: bool,
-    /// The same attack found twice is dropped unscored.
+    /// The same attack found twice is dropped (unscored; or once dated back onto it).
     pub same_onset: bool,
 }
 

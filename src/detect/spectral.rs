@@ -190,6 +190,9 @@ struct Decision {
     /// Decision windows its choice heard, and why more than one.
     heard_windows: usize,
     waited_for: Option<Wait>,
+    /// Samples before its onset that an impulse that fires is dated: where its take's
+    /// earlier placement falls, when its soft start was lost ([`SpectralMatcher::dated_back`]).
+    dated_back: u64,
 }
 
 /// A placed onset waiting for its decision.
@@ -1408,6 +1411,7 @@ impl SpectralMatcher {
                 .last_impulse
                 .map(|last| (last.span.0, last.span.1.max(time_sample))),
             Outcome::HeldContinues => self.held.current().map(|h| (h.begin_sample, self.received)),
+            Outcome::SameOnset => self.last_fired.map(|t| (t, t)),
             _ => None,
         }
     }
@@ -1497,6 +1501,21 @@ impl SpectralMatcher {
                 }
             }
         }
+        let dated_back = if outcome == Outcome::Fired {
+            self.dated_back(pi, time_sample, judged_over_tail)
+        } else {
+            0
+        };
+        // Dated back onto the attack of the last sound that fired (a word found on its
+        // vowel, whose consonant an onset of its own had found), it is that sound again.
+        if dated_back > 0
+            && !self.off.same_onset
+            && self.last_fired.is_some_and(|last| {
+                time_sample.saturating_sub(dated_back).abs_diff(last) < self.min_gap_samples
+            })
+        {
+            outcome = Outcome::SameOnset;
+        }
         let decision = Decision {
             time_sample,
             onset_frame,
@@ -1510,6 +1529,7 @@ impl SpectralMatcher {
             judged_over_tail,
             heard_windows: parted_over.max(heard_windows),
             waited_for,
+            dated_back,
         };
         if self.explain.is_some() {
             self.record(&decision);
@@ -1547,7 +1567,7 @@ impl SpectralMatcher {
             // What its first window looked like may have misled the gates; what came
             // before it is the guard's to judge, and a user who plays a take back while
             // talking turns the guard off.
-            if outcome != Outcome::SpeechGuard && !self.off.copies {
+            if !matches!(outcome, Outcome::SpeechGuard | Outcome::SameOnset) && !self.off.copies {
                 self.copies.wait(time_sample);
             }
             return None;
@@ -1663,29 +1683,7 @@ impl SpectralMatcher {
         let take_length = self.templates[best_template].length_after_onset;
         // The impulse, or the begin marker of a held sound (the daemon sends it at
         // once; the detector keeps it only for callers that asked for begins).
-        // An impulse found by the later placement of a take that a quiet room places
-        // earlier began that much before where it was placed when its soft start was
-        // lost under the room or the last sound's tail. It is dated there, as a copy
-        // is, when both say so: its own features chose that placement (over a fired
-        // word's tail they are mostly the tail's, and the take that scored best says
-        // nothing of where the sound began), and the sound there is at least as loud,
-        // against the instance's first window, as the take's soft start is against its
-        // own (quieter, nothing hid a soft start: the onset was placed on it, or it has
-        // none).
-        let template = &self.templates[best_template];
-        let after_earlier = if !self.off.dated_back
-            && template.after_earlier > 0
-            && !d.judged_over_tail
-            && self.hides_a_soft_start(
-                time_sample,
-                template.after_earlier,
-                template.soft_start_share,
-            ) {
-            template.after_earlier
-        } else {
-            0
-        };
-        let began = time_sample.saturating_sub(after_earlier);
+        let began = time_sample.saturating_sub(d.dated_back);
         let decided = self.decided(pi, began, strength, best_score);
         let kind = self.patterns[pi].kind;
         if kind == PatternKind::Continuous {
@@ -2291,6 +2289,32 @@ impl SpectralMatcher {
             .sum()
     }
 
+    /// Samples before its onset at `time_sample` that a sound of pattern `pi`, about to
+    /// fire, is dated. One found by the later placement of a take that a quiet room
+    /// places earlier began that much before where it was placed when its soft start
+    /// was lost under the room or the last sound's tail. It is dated there, as a copy
+    /// is, when both say so: its own features chose that placement (over a fired word's
+    /// tail they are mostly the tail's, and the take that scored best says nothing of
+    /// where the sound began), and the sound there is at least as loud, against the
+    /// instance's first window, as the take's soft start is against its own (quieter,
+    /// nothing hid a soft start: the onset was placed on it, or it has none).
+    fn dated_back(&self, pi: usize, time_sample: u64, judged_over_tail: bool) -> u64 {
+        let template = &self.templates[self.pattern_scores[pi].take];
+        if !self.off.dated_back
+            && template.after_earlier > 0
+            && !judged_over_tail
+            && self.hides_a_soft_start(
+                time_sample,
+                template.after_earlier,
+                template.soft_start_share,
+            )
+        {
+            template.after_earlier
+        } else {
+            0
+        }
+    }
+
     /// Whether the `span` samples before `time_sample` hold a sound whose mean power is
     /// at least `share` of the decision window's from `time_sample`.
     fn hides_a_soft_start(&self, time_sample: u64, span: u64, share: f64) -> bool {
@@ -2703,5 +2727,93 @@ impl SpectralMatcher {
             emitted_at: self.received as f64 / self.rate,
             pitch,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Method;
+    use crate::detect::white_noise;
+
+    /// The rate the matcher runs at; a detector resamples its input to it.
+    fn rate() -> f64 {
+        f64::from(DetectorSettings::default().sample_rate)
+    }
+
+    /// 40 ms of noise `gain` under full scale, then 0.2 s of a 140 Hz buzz: a word
+    /// whose soft start a loud room hides.
+    fn soft_then_buzz(gain: f32) -> Vec<f32> {
+        let mut x = white_noise((0.04 * rate()) as usize, gain, 3);
+        x.extend((0..(0.2 * rate()) as usize).map(|i| {
+            let t = i as f64 / rate();
+            let buzz: f64 = (1..28)
+                .map(|k| (2.0 * std::f64::consts::PI * 140.0 * k as f64 * t).sin() / k as f64)
+                .sum();
+            (0.25 * buzz) as f32
+        }));
+        x
+    }
+
+    fn events_with(off: Ablation, rec: &[f32]) -> Vec<Event> {
+        let settings = DetectorSettings {
+            method: Method::Spectral,
+            ..DetectorSettings::default()
+        };
+        let take = soft_then_buzz(0.02);
+        let pattern =
+            Pattern::from_samples("soft", PatternKind::Impulse, vec![take], &settings).unwrap();
+        let mut matcher = SpectralMatcher::new(vec![pattern], &settings, settings.sample_rate);
+        matcher.off = off;
+        let mut out = Vec::new();
+        for block in rec.chunks(256) {
+            matcher.push(block, &mut out);
+        }
+        matcher.finish(&mut out);
+        out
+    }
+
+    /// In a quiet room the soft start of each instance is an onset and fires; the buzz
+    /// 40 ms on, far louder, is an onset too, found by the take's later placement and
+    /// dated back where that placement's soft start falls: on the onset that fired.
+    /// With the two gates off that take the buzz for the soft start's own later sound
+    /// (the continuation, and the attack after a soft start), it is that sound again
+    /// all the same, not a second event there; with the same-onset rule off as well,
+    /// instances fire twice at their start.
+    #[test]
+    fn a_sound_dated_back_onto_the_onset_that_fired_is_that_sound_again() {
+        let instance = soft_then_buzz(0.02);
+        let mut rec = white_noise((5.5 * rate()) as usize, 0.001, 9);
+        let starts: Vec<f64> = (0..8).map(|k| 0.5 + 0.6 * f64::from(k)).collect();
+        for &t in &starts {
+            let at = (t * rate()) as usize;
+            for (r, x) in rec[at..].iter_mut().zip(&instance) {
+                *r += x;
+            }
+        }
+        let dated_at_start = |events: &[Event]| -> Vec<usize> {
+            starts
+                .iter()
+                .map(|t| {
+                    events
+                        .iter()
+                        .filter(|e| (e.time - t).abs() <= 0.015)
+                        .count()
+                })
+                .collect()
+        };
+        let own_later_sound_off = Ablation {
+            continuation: true,
+            soft_start_attack: true,
+            ..Ablation::default()
+        };
+        let events = events_with(own_later_sound_off, &rec);
+        assert_eq!(dated_at_start(&events), vec![1; 8], "{events:#?}");
+        let same_onset_off_too = Ablation {
+            same_onset: true,
+            ..own_later_sound_off
+        };
+        let twice = dated_at_start(&events_with(same_onset_off_too, &rec));
+        assert!(twice.contains(&2), "{twice:?}");
     }
 }
