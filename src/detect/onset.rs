@@ -260,6 +260,12 @@ impl OnsetDetector {
         self.read_ahead_frames
     }
 
+    /// Frames after an onset during which a sound that has not fallen back gives no
+    /// other onset as loud (`rearm_after_seconds`).
+    pub fn hold_frames(&self) -> u64 {
+        self.rearm_after_frames
+    }
+
     /// Sets the floors from the first frames of a stream that begins with a sound
     /// (`powers`: their band powers, `bands` values a frame, in time order; at most
     /// [`Self::read_ahead_frames`]), before the first is pushed. A floor that starts from

@@ -2410,7 +2410,9 @@ impl SpectralMatcher {
     /// is said at another pace and with more of its attacks than it was enrolled with:
     /// while they keep coming at about its pace (each no further from the last taken
     /// for its own than the longest gap between attacks of its pattern's takes, and
-    /// `CONTINUATION_SLACK_SECONDS`) and for as long as its sound may stretch
+    /// `CONTINUATION_SLACK_SECONDS`, and the onset stage's hold, within which attacks
+    /// that came before the last had fallen back were no onsets) and for as long as its
+    /// sound may stretch
     /// (`SPAN_STRETCH` times its take), any of its take's later frames. None without
     /// such an impulse, or when the onset lies past its take's end otherwise.
     fn continuation_lags(&self, onset_frame: u64) -> Option<ContinuationLags> {
@@ -2427,8 +2429,12 @@ impl SpectralMatcher {
             self.patterns[template.pattern].repeats_every,
             self.off.repeated,
         ) {
+            // The attacks the onset stage held back (as loud, before the last had
+            // fallen back) were no onsets: the last of them may lie up to its hold
+            // after the last one taken for the sound's own.
             let since_attack = onset_frame.saturating_sub(last.last_attack_frame) as usize;
-            if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack {
+            let unseen = self.onsets.hold_frames() as usize;
+            if after <= SPAN_STRETCH as usize * count && since_attack <= gap + slack + unseen {
                 return Some(ContinuationLags {
                     last,
                     lags: 1..=count,
@@ -2753,6 +2759,63 @@ mod tests {
             (0.25 * buzz) as f32
         }));
         x
+    }
+
+    /// A teeth chatter's take: one click (noise dying away over 1 ms) six times, 45 ms
+    /// apart, over noise 60 dB down.
+    fn chatter_take() -> Vec<f32> {
+        let mut x = white_noise((0.35 * rate()) as usize, 0.001, 11);
+        for k in 0u32..6 {
+            let at = (0.05 + 0.045 * f64::from(k)) * rate();
+            let click = white_noise((0.006 * rate()) as usize, 0.5, 20);
+            for (i, c) in click.iter().enumerate() {
+                x[at as usize + i] += c * (-(i as f64) / (0.001 * rate())).exp() as f32;
+            }
+        }
+        x
+    }
+
+    /// A sound of one sound repeated goes on while its attacks come at its pace; the
+    /// onset stage takes none of them that come before the last has fallen back until
+    /// its hold has passed, so the next attack it gives may lie that much further from
+    /// the last one taken for the sound's own, and still continue it. One frame further
+    /// it does not.
+    #[test]
+    fn a_repeated_sound_goes_on_past_the_attacks_the_onset_stage_held_back() {
+        let settings = DetectorSettings {
+            method: Method::Spectral,
+            ..DetectorSettings::default()
+        };
+        let pattern = Pattern::from_samples(
+            "chatter",
+            PatternKind::Impulse,
+            vec![chatter_take()],
+            &settings,
+        )
+        .unwrap();
+        let mut matcher = SpectralMatcher::new(vec![pattern], &settings, settings.sample_rate);
+        let template = matcher
+            .templates
+            .iter()
+            .position(|t| t.repeats_every.is_some())
+            .expect("the take is one sound repeated");
+        let gap = matcher.patterns[0].repeats_every.unwrap() as u64;
+        let slack = (CONTINUATION_SLACK_SECONDS / HOP_SECONDS).round() as u64;
+        let hold = matcher.onsets.hold_frames();
+        let fired = 1000;
+        matcher.last_impulse = Some(FiredImpulse {
+            template,
+            span: (0, 0),
+            onset_frame: fired,
+            strength: 1.0,
+            last_attack_frame: fired,
+            first_attack: [0.0; FEATURES],
+            first_attack_energy: 1.0,
+        });
+        let repeated = |frame: u64| matcher.continuation_lags(frame).is_some_and(|c| c.repeated);
+        assert!(repeated(fired + gap + slack));
+        assert!(repeated(fired + gap + slack + hold));
+        assert!(!repeated(fired + gap + slack + hold + 1));
     }
 
     fn events_with(off: Ablation, rec: &[f32]) -> Vec<Event> {
