@@ -311,8 +311,17 @@ impl Context {
     }
 
     /// Whether some recognised sound holds sample `n`.
-    pub(super) fn recognised_at(&self, n: u64) -> bool {
-        self.spans.iter().any(|s| !s.near_speech && s.holds(n))
+    #[cfg(test)]
+    fn recognised_at(&self, n: u64) -> bool {
+        self.recognised_except(n, None)
+    }
+
+    /// Whether some recognised sound holds sample `n`, the impulse that fired from
+    /// sample `except` (if any) left out.
+    fn recognised_except(&self, n: u64, except: Option<u64>) -> bool {
+        self.spans
+            .iter()
+            .any(|s| !s.near_speech && s.holds(n) && !(s.fired && except == Some(s.from)))
     }
 
     /// Whether a stopped sound near speech holds sample `n`.
@@ -331,9 +340,33 @@ impl Context {
     /// heard clear of talk: at most half of what closes the guard, so that what fires
     /// there may teach tracking ([`super::classify::Tracked`]).
     pub(super) fn guard(&self, frames: impl Iterator<Item = (u64, f32)>, peak_db: f32) -> Before {
+        self.judge(frames, peak_db, None)
+    }
+
+    /// [`Context::guard`] of the frames after an impulse that fired, its own span (the
+    /// one that begins at sample `own_from`) covering none of them: that span grows
+    /// over whatever sound goes on after it, talk after a syllable taken for a word
+    /// too, and what came after an event is not judged by the event.
+    pub(super) fn guard_after(
+        &self,
+        frames: impl Iterator<Item = (u64, f32)>,
+        peak_db: f32,
+        own_from: u64,
+    ) -> Before {
+        self.judge(frames, peak_db, Some(own_from))
+    }
+
+    /// The guard's count, the fired span beginning at `except` (if any) covering
+    /// nothing.
+    fn judge(
+        &self,
+        frames: impl Iterator<Item = (u64, f32)>,
+        peak_db: f32,
+        except: Option<u64>,
+    ) -> Before {
         let (mut unrecognised, mut near_speech) = (0, 0);
         for (centre, level) in frames {
-            match self.counted(centre, level, peak_db) {
+            match self.counted(centre, level, peak_db, except) {
                 Some(Counted::Unrecognised) => unrecognised += 1,
                 Some(Counted::NearSpeech) => near_speech += 1,
                 None => {}
@@ -363,7 +396,7 @@ impl Context {
     ) -> Option<(u64, u64)> {
         let mut span: Option<(u64, u64)> = None;
         for (centre, level) in frames {
-            let counts = match self.counted(centre, level, peak_db) {
+            let counts = match self.counted(centre, level, peak_db, None) {
                 Some(Counted::Unrecognised) => guard != Guard::Open,
                 Some(Counted::NearSpeech) => guard == Guard::ClosedByStopped,
                 None => false,
@@ -378,10 +411,16 @@ impl Context {
     /// How the guard counts a frame centred on sample `centre` at `level` (dB), before
     /// a new sound that peaks at `peak_db`: none when it holds no sound over the room,
     /// lies `guard_db` under the new sound or a recognised sound covers it.
-    fn counted(&self, centre: u64, level: f32, peak_db: f32) -> Option<Counted> {
+    fn counted(
+        &self,
+        centre: u64,
+        level: f32,
+        peak_db: f32,
+        except: Option<u64>,
+    ) -> Option<Counted> {
         if level <= SILENT_DB
             || level < peak_db - self.params.guard_db
-            || self.recognised_at(centre)
+            || self.recognised_except(centre, except)
         {
             None
         } else if self.near_speech_at(centre) {
@@ -474,6 +513,27 @@ mod tests {
             c.guard_sound(frames(0, 100, -25.0), -20.0, Guard::Open),
             None
         );
+    }
+
+    /// Talk that goes on after an impulse that fired (a syllable taken for a word) keeps
+    /// within `SOUND_DROP_DB` of its peak: its span grows over it, and to the guard of
+    /// the next onsets it is that impulse's sound. What came after the impulse itself
+    /// is judged without that span: talk after it.
+    #[test]
+    fn talk_after_an_impulse_is_not_its_own_sound_to_what_follows_it() {
+        let mut c = context();
+        c.fired_impulse(0, 99, -20.0, 4_000);
+        for centre in 100..1_000 {
+            c.follow(centre, centre, -22.0);
+        }
+        let after = || frames(100, 650, -22.0);
+        assert_eq!(c.guard(after(), -20.0).guard, Guard::Open);
+        assert!(c.guard(after(), -20.0).clear_of_talk);
+        let own = c.guard_after(after(), -20.0, 0);
+        assert_eq!(own.guard, Guard::Closed);
+        assert!(!own.clear_of_talk);
+        // Another impulse's span is left as it is.
+        assert!(c.guard_after(after(), -20.0, 50).clear_of_talk);
     }
 
     #[test]

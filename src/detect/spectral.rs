@@ -533,6 +533,8 @@ struct Lesson {
     /// Where its take's sound ends, and its peak (dB) as the guard judges sound by.
     end_sample: u64,
     peak: f32,
+    /// Where the span it covers for the speech guard begins ([`Context::fired_impulse`]).
+    covered_from: u64,
     features: [f32; FEATURES],
     score: f32,
     take_score: f32,
@@ -1732,7 +1734,7 @@ impl SpectralMatcher {
             self.copies.fired(time_sample, pi);
             // Taught at once, for the next onsets; kept once the sound after it shows
             // it was not talk ([`Self::teach_due`]).
-            let lesson = self.lesson(pi, time_sample, time_sample + take_length, d);
+            let lesson = self.lesson(pi, covered_from, time_sample + take_length, d);
             (!self.off.tracking).then(|| {
                 let taught = self
                     .tracked
@@ -2216,7 +2218,7 @@ impl SpectralMatcher {
     /// its take's sound ending at `end_sample`, teaches tracking ([`Tracked::follow`]):
     /// this instance as it scored, whether it began over a fired word's tail, and
     /// whether it was heard amid talk ([`Context::guard`]).
-    fn lesson(&self, pi: usize, time_sample: u64, end_sample: u64, d: &Decision) -> Lesson {
+    fn lesson(&self, pi: usize, covered_from: u64, end_sample: u64, d: &Decision) -> Lesson {
         let other = self
             .pattern_scores
             .iter()
@@ -2228,9 +2230,10 @@ impl SpectralMatcher {
         features.copy_from_slice(&self.best_instance[..FEATURES]);
         Lesson {
             pattern: pi,
-            time_sample,
+            time_sample: d.time_sample,
             end_sample,
             peak: d.peak,
+            covered_from,
             features,
             score: self.pattern_scores[pi].score,
             take_score: self.pattern_scores[pi].take_score,
@@ -2256,7 +2259,12 @@ impl SpectralMatcher {
                 return;
             }
             self.lessons.pop();
-            if self.guard(due, lesson.peak).clear_of_talk {
+            // Judged without its own span, which grows over whatever sound goes on
+            // after it: talk after a syllable taken for a word would confirm it.
+            let after =
+                self.context
+                    .guard_after(self.guard_frames(due), lesson.peak, lesson.covered_from);
+            if after.clear_of_talk {
                 let instance = lesson.instance(&self.patterns, &self.takes_agree);
                 self.confirmed.follow(lesson.pattern, &instance);
                 continue;
