@@ -2214,8 +2214,9 @@ impl SpectralMatcher {
         }
     }
 
-    /// What the impulse of pattern `pi` that fires at `time_sample` (decided as `d`),
-    /// its take's sound ending at `end_sample`, teaches tracking ([`Tracked::follow`]):
+    /// What the impulse of pattern `pi` that fires as decided in `d`, its span for the
+    /// speech guard beginning at `covered_from` and its take's sound ending at
+    /// `end_sample`, teaches tracking ([`Tracked::follow`]):
     /// this instance as it scored, whether it began over a fired word's tail, and
     /// whether it was heard amid talk ([`Context::guard`]).
     fn lesson(&self, pi: usize, covered_from: u64, end_sample: u64, d: &Decision) -> Lesson {
