@@ -18,7 +18,9 @@
 //! [`Context::held_began`]), but what it alone closes the guard on covers again
 //! ([`Guard::ClosedByStopped`]). The guard judges only the frames of
 //! its span before an onset, so it opens within two of its spans and a stopped sound's
-//! length of the last sound no pattern recognised, whatever follows.
+//! length of the last sound no pattern recognised, whatever follows. The talk after an
+//! impulse that fired (whether what it taught tracking is kept) is judged without that
+//! impulse's own span ([`Context::guard_after`]).
 //!
 //! A stage of the spectral matcher ([`super::spectral`]), which gives it the frames of
 //! that span as (centre sample, level dB); runs on the detector thread, fixed size,
