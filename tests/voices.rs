@@ -983,3 +983,90 @@ fn a_word_after_a_long_held_sound_the_guard_stopped_is_found() {
         explained(&mut det)
     );
 }
+
+/// A voice's own stressed syllable after a pause begins as one of its words does, and
+/// no talk closes the guard on it. Said inside the voice's talk, with talk after it as
+/// well as before, the same syllable was heard as talk: said again after a pause, it is
+/// talk, not the word. Each syllable the guard stopped inside the talk is cut out and
+/// said again, once after a second of quiet alone (where those that fire show it is a
+/// sound the words are taken for) and once a second after the talk.
+#[test]
+fn a_syllable_of_the_voices_own_talk_said_again_after_a_pause_is_talk_not_its_word() {
+    use onomato::detect::gates::Outcome;
+    let dir = temp_dir("own-talk");
+    let settings = spectral();
+    let voice = "en-029+Marco";
+    let patterns: Vec<Pattern> = ["tick", "pop", "pew", "boom"]
+        .iter()
+        .map(|name| {
+            let take = word_by(&dir, name, name, voice, "175");
+            Pattern::from_samples(name, PatternKind::Impulse, vec![take], &settings).unwrap()
+        })
+        .collect();
+    let path = dir.join("talk.wav");
+    let text = root().join("tests/data/speech-paragraph.txt");
+    #[rustfmt::skip]
+    run("espeak-ng", &["-v", voice, "-s", "165", "-p", "50", "-w", path.to_str().unwrap(), "-f", text.to_str().unwrap()]);
+    let talk = read(&path);
+    let run_on = |rec: &[f32]| {
+        let mut rec = rec.to_vec();
+        add_noise(&mut rec, 0.0005, 31);
+        let mut det = Detector::new(patterns.clone(), &settings, RATE).unwrap();
+        det.enable_explain();
+        let events = detect_in_blocks(&mut det, &rec, 256);
+        (events, det.take_explain().unwrap_or_default())
+    };
+    let (_, records) = run_on(&talk);
+    let stopped: Vec<f64> = records
+        .iter()
+        .filter(|r| r.outcome == Outcome::SpeechGuard && r.best.is_some())
+        .map(|r| r.time)
+        .collect();
+    let pause = samples_for(1.0, RATE);
+    let mut fired_alone = 0;
+    for &at in &stopped {
+        // From 20 ms before its onset, faded in over 15 ms, to 350 ms after it.
+        let from = samples_for(at - 0.02, RATE);
+        let mut syllable = talk[from..(from + samples_for(0.37, RATE)).min(talk.len())].to_vec();
+        let fade = samples_for(0.015, RATE);
+        for (i, x) in syllable.iter_mut().take(fade).enumerate() {
+            *x *= i as f32 / fade as f32;
+        }
+        let again = |before: &[f32]| {
+            let mut rec = before.to_vec();
+            rec.extend(vec![0.0; pause]);
+            let said = rec.len() as f64 / f64::from(RATE) + 0.02;
+            rec.extend(&syllable);
+            rec.extend(vec![0.0; samples_for(0.5, RATE)]);
+            let (events, records) = run_on(&rec);
+            let fired: Vec<String> = events
+                .iter()
+                .filter(|e| e.time > said - 0.05)
+                .map(|e| format!("{} {:.3}", e.pattern, e.time))
+                .collect();
+            let onset = records
+                .into_iter()
+                .filter(|r| (r.time - said).abs() <= 0.03)
+                .min_by(|a, b| (a.time - said).abs().total_cmp(&(b.time - said).abs()));
+            (fired, onset)
+        };
+        if again(&[]).0.is_empty() {
+            continue;
+        }
+        fired_alone += 1;
+        let (fired, onset) = again(&talk);
+        assert!(
+            fired.is_empty()
+                && onset
+                    .as_ref()
+                    .is_some_and(|r| r.outcome == Outcome::Background
+                        && r.because_of.is_some_and(|s| s.from < at + 0.5)),
+            "the syllable of {at:.3} s, said again after the talk: fired {fired:?}, {onset:#?}"
+        );
+    }
+    assert!(
+        fired_alone > 0,
+        "none of the {} syllables the guard stopped fires alone: nothing tested",
+        stopped.len()
+    );
+}

@@ -45,11 +45,14 @@ pub(super) struct Ablation {
     pub second_placement: bool,
     /// The same attack found twice is dropped (unscored; or once dated back onto it).
     pub same_onset: bool,
+    /// The talk heard lately (the sounds the guard stopped amid talk) compared as
+    /// background.
+    pub heard_talk: bool,
 }
 
 /// Every switch's name, in the order of the fields.
 #[cfg_attr(not(feature = "ablation"), allow(dead_code))]
-pub(super) const NAMES: [&str; 18] = [
+pub(super) const NAMES: [&str; 19] = [
     "quiet_before",
     "over_fired",
     "over_tail",
@@ -68,6 +71,7 @@ pub(super) const NAMES: [&str; 18] = [
     "dated_back",
     "second_placement",
     "same_onset",
+    "heard_talk",
 ];
 
 impl Ablation {
@@ -95,6 +99,7 @@ impl Ablation {
                 "dated_back" => &mut off.dated_back,
                 "second_placement" => &mut off.second_placement,
                 "same_onset" => &mut off.same_onset,
+                "heard_talk" => &mut off.heard_talk,
                 other => {
                     return Err(format!(
                         "ONOMATO_ABLATE: no mechanism {other:?}; expected some of {}",

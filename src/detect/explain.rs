@@ -32,9 +32,15 @@ pub struct OnsetRecord {
     /// Amplitude against the best pattern's take over the decision window.
     #[serde(serialize_with = "super::opt_ratio")]
     pub strength: Option<f64>,
-    /// The nearest background sound's score (none when the model is not used).
+    /// The nearest score of a sound that must never fire: the background of speech,
+    /// the user's own background recordings, or the user's talk heard lately (none
+    /// when none is compared).
     #[serde(serialize_with = "super::opt_ratio")]
     pub background_score: Option<f64>,
+    /// The score of the user's talk heard lately that lies nearest (none before any
+    /// was heard): sounds the guard stopped inside talk, kept for a minute.
+    #[serde(serialize_with = "super::opt_ratio")]
+    pub talk_score: Option<f64>,
     /// How far the sound's peak rose above the 5-40 ms before its onset, dB (the
     /// quiet-before gate asks for 10).
     #[serde(serialize_with = "super::opt_db")]
@@ -71,7 +77,9 @@ pub struct OnsetRecord {
     /// frames counted); for `continuation`, the impulse whose own later sound it is
     /// (its onset to its take's end, or to this onset when a sound of one sound repeated
     /// goes on past it); for `held_continues`, the held sound going on
-    /// (its begin to the decision); for `same_onset`, the onset that fired.
+    /// (its begin to the decision); for `same_onset`, the onset that fired; for
+    /// `background`, the onset of the talk heard lately that it lay nearest, when that
+    /// was the nearest sound that must never fire.
     pub because_of: Option<SoundSpan>,
 }
 
@@ -212,6 +220,7 @@ impl OnsetRecord {
             second_score: None,
             strength: None,
             background_score: None,
+            talk_score: None,
             rise_db: None,
             over_fired_impulse: false,
             explained_over_tail: None,

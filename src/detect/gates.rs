@@ -124,6 +124,9 @@ pub struct Evidence {
     pub threshold: f32,
     /// The nearest background sound's score (minus infinity without a background).
     pub background_score: f32,
+    /// The score of the user's talk heard lately that lies nearest (minus infinity
+    /// before any was heard; [`super::talk`]).
+    pub talk_score: f32,
     /// A held sound of the best pattern is going on.
     pub held_by_best_pattern: bool,
     /// Amplitude against the best pattern's take.
@@ -156,9 +159,22 @@ impl Evidence {
         self.best_score < self.threshold
     }
 
-    /// The background explains the sound better than its pattern.
+    /// The nearest of the sounds that must never fire: the background and, for an
+    /// impulse, the user's own talk heard lately (a held sound's vowel or hiss is in
+    /// every talk, a held pattern's among it: [`super::talk`]).
+    pub fn speech_score(&self) -> f32 {
+        let talk = if self.best_is_impulse {
+            self.talk_score
+        } else {
+            f32::NEG_INFINITY
+        };
+        self.background_score.max(talk)
+    }
+
+    /// The background, or the user's own talk, explains the sound better than its
+    /// pattern.
     pub fn like_speech(&self, params: &GateParams) -> bool {
-        self.background_score >= self.best_score + params.background_margin
+        self.speech_score() >= self.best_score + params.background_margin
     }
 }
 
@@ -211,6 +227,7 @@ mod tests {
             explained_over_tail: 0.0,
             threshold: 0.3,
             background_score: 0.5,
+            talk_score: f32::NEG_INFINITY,
             held_by_best_pattern: false,
             strength: 1.0,
         }
@@ -248,7 +265,7 @@ mod tests {
     #[test]
     fn each_gate_stops_an_onset_by_its_own_evidence_and_names_itself() {
         let p = GateParams::default();
-        let cases: [(Evidence, Outcome); 7] = [
+        let cases: [(Evidence, Outcome); 8] = [
             (
                 Evidence {
                     rise_db: 9.9,
@@ -281,6 +298,14 @@ mod tests {
                 Evidence {
                     // The background nearer than the pattern by the margin.
                     background_score: clear().best_score + p.background_margin,
+                    ..clear()
+                },
+                Outcome::Background,
+            ),
+            (
+                Evidence {
+                    // The user's own talk heard lately, as near.
+                    talk_score: clear().best_score + p.background_margin,
                     ..clear()
                 },
                 Outcome::Background,

@@ -28,6 +28,7 @@ mod place;
 mod recent_min;
 pub mod spectral;
 mod syllable;
+mod talk;
 pub mod waveform;
 
 use std::path::{Path, PathBuf};

@@ -108,7 +108,8 @@ use super::onset::{holds_sound, Onset, OnsetDetector, OnsetParams};
 use super::passband::Passband;
 use super::pitch::PitchEstimator;
 use super::place::{Placer, PLACE_AFTER_FRAMES};
-use super::syllable::{SecondLooks, SyllableParams, Waiting};
+use super::syllable::{Afterwards, SecondLooks, SyllableParams, Waiting};
+use super::talk::HeardTalk;
 use super::Event;
 use crate::config::{DetectorSettings, PatternKind, DEFAULT_SPEECH_GUARD_SECONDS};
 use crate::pattern::Pattern;
@@ -461,6 +462,18 @@ pub struct SpectralMatcher {
     background_full: BackgroundModel,
     /// The onset being classified: its best similarity with the background.
     background_score: f32,
+    /// The user's own talk, as the onsets the guard stopped amid it sounded
+    /// ([`HeardTalk`]).
+    talk: HeardTalk,
+    /// The onset being classified: the talk heard lately that lies nearest it, its
+    /// similarity and the sample it was heard at.
+    talk_nearest: Option<(f32, u64)>,
+    /// Onsets the guard stopped, waiting for their sound to show whether it went on
+    /// as a syllable's...
+    talk_heard: Fifo<TalkWaiting, LESSONS>,
+    /// ...and those that did, waiting to be known as talk once the sound after them
+    /// is in.
+    talk_waiting: Fifo<TalkWaiting, LESSONS>,
     /// Per ordered pair of patterns (row-major): over how many decision windows the
     /// choice between them is made ([`Separating`]).
     separating: Vec<u8>,
@@ -522,6 +535,16 @@ impl PatternScore {
         take: usize::MAX,
         take_score: f32::NEG_INFINITY,
     };
+}
+
+/// An onset the guard stopped, waiting until the guard's span after its take's sound
+/// is in to be known as talk ([`SpectralMatcher::learn_talk_due`]).
+#[derive(Clone, Copy, Default)]
+struct TalkWaiting {
+    time_sample: u64,
+    end_sample: u64,
+    peak: f32,
+    features: [f32; FEATURES],
 }
 
 /// What an impulse that fired taught tracking, waiting to be kept until the speech
@@ -932,6 +955,10 @@ impl SpectralMatcher {
             background: background_full.own_copy(),
             background_full,
             background_score: f32::NEG_INFINITY,
+            talk: HeardTalk::new(FEATURES, rate),
+            talk_nearest: None,
+            talk_heard: Fifo::new(),
+            talk_waiting: Fifo::new(),
             separating: vec![1; n_patterns * n_patterns],
             separating_scratch: Separating::new(
                 templates_len,
@@ -1006,6 +1033,7 @@ impl SpectralMatcher {
         self.separating_scratch
             .waits(&self.templates, &self.kinds, cepstrum, &mut self.separating);
         self.background.compare_on(&self.background_full, cepstrum);
+        self.talk.forget();
         self.tracked.forget();
         self.confirmed.forget();
         while self.lessons.pop().is_some() {}
@@ -1330,6 +1358,7 @@ impl SpectralMatcher {
         self.check_copies(out);
         self.check_second_looks(out);
         self.teach_due();
+        self.learn_talk_due();
         self.follow_held(f, out);
         self.follow_stopped_held(f);
     }
@@ -1414,6 +1443,10 @@ impl SpectralMatcher {
                 .map(|last| (last.span.0, last.span.1.max(time_sample))),
             Outcome::HeldContinues => self.held.current().map(|h| (h.begin_sample, self.received)),
             Outcome::SameOnset => self.last_fired.map(|t| (t, t)),
+            Outcome::Background => self
+                .talk_nearest
+                .filter(|&(score, _)| score > self.background_score)
+                .map(|(_, at)| (at, at)),
             _ => None,
         }
     }
@@ -1537,6 +1570,20 @@ impl SpectralMatcher {
             self.record(&decision);
         }
         self.cover_stopped(&decision);
+        if outcome == Outcome::SpeechGuard
+            && !self.off.heard_talk
+            && self.patterns[decision.pattern].kind == PatternKind::Impulse
+        {
+            let take = self.pattern_scores[decision.pattern].take;
+            let mut features = [0.0f32; FEATURES];
+            features.copy_from_slice(&self.best_instance[..FEATURES]);
+            self.talk_heard.push(TalkWaiting {
+                time_sample,
+                end_sample: time_sample + self.templates[take].length_after_onset,
+                peak: decision.peak,
+                features,
+            });
+        }
         // A second look fires what the background took, so it must pass the gates after
         // the background (a sound too faint to be the user's is not, however it falls
         // away). Over a fired word's tail the sound after the onset is partly that
@@ -1599,6 +1646,7 @@ impl SpectralMatcher {
             strength: Some(evidence.strength),
             background_score: (!self.background.is_empty())
                 .then_some(f64::from(self.background_score)),
+            talk_score: self.talk_nearest.map(|(score, _)| f64::from(score)),
             rise_db: evidence
                 .rise_db
                 .is_finite()
@@ -1646,7 +1694,7 @@ impl SpectralMatcher {
         let pi = d.pattern;
         let covered_from = self.covered_from(d.time_sample);
         let near_speech = d.guard == Guard::Closed
-            && evidence.best_score - evidence.background_score < self.gates.background_margin;
+            && evidence.best_score - evidence.speech_score() < self.gates.background_margin;
         if self.patterns[pi].kind == PatternKind::Continuous {
             // A held sound covers as long as the held stage hears it go on.
             self.end_stopped_held();
@@ -1892,7 +1940,7 @@ impl SpectralMatcher {
             pool_ring(&self.frames, cap, onset_frame, k, &mut power);
             self.in_compared_bands(self.decision_window_energy(time_sample), &power)
         };
-        self.score_patterns(onset_frame);
+        self.score_patterns(time_sample, onset_frame);
         let mut best = 0;
         for (p, s) in self.pattern_scores.iter().enumerate() {
             if s.score > self.pattern_scores[best].score {
@@ -1920,6 +1968,9 @@ impl SpectralMatcher {
                 ))
                 || (!self.off.soft_start_attack && self.attack_after_soft_start(onset_frame, best)),
             background_score: self.background_score,
+            talk_score: self
+                .talk_nearest
+                .map_or(f32::NEG_INFINITY, |(score, _)| score),
             best_score: f32::NEG_INFINITY,
             best_is_impulse: false,
             explained_over_tail: 0.0,
@@ -2162,9 +2213,10 @@ impl SpectralMatcher {
     /// Scores the onset at frame `onset_frame` against every pattern's takes and
     /// tracked template and kept instances, at each shift, into `pattern_scores`; keeps
     /// the features that scored best in `best_instance`.
-    fn score_patterns(&mut self, onset_frame: u64) {
+    fn score_patterns(&mut self, time_sample: u64, onset_frame: u64) {
         self.pattern_scores.fill(PatternScore::NONE);
         self.background_score = f32::NEG_INFINITY;
+        self.talk_nearest = None;
         let mut best = f32::NEG_INFINITY;
         self.room.set(self.onsets.band_floors());
         for shift in 0..=2 * MAX_SHIFT {
@@ -2196,6 +2248,11 @@ impl SpectralMatcher {
             self.background_score = self
                 .background_score
                 .max(self.background.nearest(&self.instance));
+            if let Some(talk) = self.talk.nearest(&self.instance, time_sample) {
+                if self.talk_nearest.is_none_or(|(best, _)| talk.0 > best) {
+                    self.talk_nearest = Some(talk);
+                }
+            }
             for (pi, s) in self.pattern_scores.iter_mut().enumerate() {
                 let tracked = self.tracked.template(pi).map(|t| (MatchedBy::Tracked, t));
                 let kept = self.tracked.kept(pi).map(|t| (MatchedBy::Kept, t));
@@ -2284,6 +2341,44 @@ impl SpectralMatcher {
                 if let Some(record) = fired {
                     record.taught = Some(Taught::NothingTalkAfter);
                 }
+            }
+        }
+    }
+
+    /// Learns the onsets the guard stopped that were inside talk ([`HeardTalk`]). First,
+    /// once a second look's stretch of its sound is in, whether it went on as a
+    /// syllable does ([`Afterwards::went_on_as_a_syllable`]; a hit falls away, and most
+    /// of a beatbox kit's sounds are unvoiced); then, once the guard's span after its
+    /// take's length is in, whether talk followed it (as much as keeps an impulse that
+    /// fired from teaching tracking). Its own sound is talk only where the guard counts
+    /// it so: a pattern's sound that only the guard stopped covers its span
+    /// ([`Self::cover_stopped`]), so a word said straight after talking, and then clear
+    /// of it, teaches nothing.
+    fn learn_talk_due(&mut self) {
+        let (window, after) = (self.second_looks.window(), self.second_looks.reach());
+        while let Some(heard) = self.talk_heard.front() {
+            if self.consumed < heard.time_sample + after {
+                break;
+            }
+            self.talk_heard.pop();
+            let samples = &self.samples;
+            let afterwards =
+                Afterwards::measure(heard.time_sample, window, after, &mut self.pitch, |n| {
+                    samples[ring_slot(samples, n)]
+                });
+            if afterwards.went_on_as_a_syllable() {
+                self.talk_waiting.push(heard);
+            }
+        }
+        let span = self.guard_samples();
+        while let Some(waiting) = self.talk_waiting.front() {
+            let due = waiting.end_sample + span;
+            if self.consumed < due {
+                return;
+            }
+            self.talk_waiting.pop();
+            if !self.guard(due, waiting.peak).clear_of_talk {
+                self.talk.learn(&waiting.features, waiting.time_sample);
             }
         }
     }

@@ -75,6 +75,12 @@ impl Afterwards {
     pub(super) fn fell_away(&self, params: &SyllableParams) -> bool {
         self.fall_db <= -params.fall_db && self.voicing < VOICED_CORRELATION
     }
+
+    /// It went on as a syllable of talk does: voiced, and as loud as its first window
+    /// or louder (its consonant ran into its vowel).
+    pub(super) fn went_on_as_a_syllable(&self) -> bool {
+        self.voicing >= VOICED_CORRELATION && self.fall_db >= 0.0
+    }
 }
 
 /// An onset waiting for its second look: its pattern as its first window named it.
@@ -114,6 +120,11 @@ impl SecondLooks {
     /// How far after an onset its second look needs the stream, samples.
     pub(super) fn reach(&self) -> u64 {
         self.after
+    }
+
+    /// A decision window, samples.
+    pub(super) fn window(&self) -> u64 {
+        self.window
     }
 
     /// The background took `onset` for speech.
