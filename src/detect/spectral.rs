@@ -472,7 +472,8 @@ pub struct SpectralMatcher {
     /// as a syllable's...
     talk_heard: Fifo<TalkWaiting, LESSONS>,
     /// ...and those that did, waiting to be known as talk once the sound after them
-    /// is in.
+    /// is in (as long a wait as a lesson's, so as many; one that finds a queue full
+    /// is not kept).
     talk_waiting: Fifo<TalkWaiting, LESSONS>,
     /// Per ordered pair of patterns (row-major): over how many decision windows the
     /// choice between them is made ([`Separating`]).
