@@ -32,9 +32,8 @@ pub struct OnsetRecord {
     /// Amplitude against the best pattern's take over the decision window.
     #[serde(serialize_with = "super::opt_ratio")]
     pub strength: Option<f64>,
-    /// The nearest score of a sound that must never fire: the background of speech,
-    /// the user's own background recordings, or the user's talk heard lately (none
-    /// when none is compared).
+    /// The nearest background sound's score: the background of speech and the user's
+    /// own background recordings (none when the model is not used).
     #[serde(serialize_with = "super::opt_ratio")]
     pub background_score: Option<f64>,
     /// The score of the user's talk heard lately that lies nearest (none before any

@@ -330,6 +330,23 @@ mod tests {
         }
     }
 
+    /// The talk heard lately is syllables: it judges an impulse pattern's onset, not a
+    /// held pattern's vowel or hiss.
+    #[test]
+    fn the_talk_heard_lately_judges_impulses_alone() {
+        let p = GateParams::default();
+        let near_talk = Evidence {
+            talk_score: clear().best_score + p.background_margin,
+            ..clear()
+        };
+        assert_eq!(decide(&near_talk, &p), Outcome::Background);
+        let held = Evidence {
+            best_is_impulse: false,
+            ..near_talk
+        };
+        assert_eq!(decide(&held, &p), Outcome::Fired);
+    }
+
     #[test]
     fn over_the_tail_of_a_sound_that_fired_a_clear_impulse_is_excused_the_rise() {
         let p = GateParams::default();
