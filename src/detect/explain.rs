@@ -37,7 +37,8 @@ pub struct OnsetRecord {
     #[serde(serialize_with = "super::opt_ratio")]
     pub background_score: Option<f64>,
     /// The score of the user's talk heard lately that lies nearest (none before any
-    /// was heard): sounds the guard stopped inside talk, kept for a minute.
+    /// was heard): sounds the guard stopped inside talk, kept for a minute. It judges
+    /// an impulse pattern's onset alone.
     #[serde(serialize_with = "super::opt_ratio")]
     pub talk_score: Option<f64>,
     /// How far the sound's peak rose above the 5-40 ms before its onset, dB (the

@@ -171,6 +171,12 @@ impl Evidence {
         self.background_score.max(talk)
     }
 
+    /// The nearest sound that must never fire is the user's own talk (which judges an
+    /// impulse pattern's onset alone).
+    pub fn by_own_talk(&self) -> bool {
+        self.best_is_impulse && self.talk_score > self.background_score
+    }
+
     /// The background, or the user's own talk, explains the sound better than its
     /// pattern.
     pub fn like_speech(&self, params: &GateParams) -> bool {
@@ -340,11 +346,20 @@ mod tests {
             ..clear()
         };
         assert_eq!(decide(&near_talk, &p), Outcome::Background);
+        assert!(near_talk.by_own_talk());
         let held = Evidence {
             best_is_impulse: false,
             ..near_talk
         };
         assert_eq!(decide(&held, &p), Outcome::Fired);
+        // A held pattern's onset the background took is not named the talk's.
+        let held_near_speech = Evidence {
+            background_score: held.talk_score,
+            talk_score: held.talk_score + 0.05,
+            ..held
+        };
+        assert_eq!(decide(&held_near_speech, &p), Outcome::Background);
+        assert!(!held_near_speech.by_own_talk());
     }
 
     #[test]

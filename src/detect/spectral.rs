@@ -1426,27 +1426,20 @@ impl SpectralMatcher {
         }
     }
 
-    /// The samples of the sound that the stage which decided `outcome` for the onset at
-    /// `time_sample` held against it ([`OnsetRecord::because_of`]); `peak` and `guard`
-    /// as its first look found them.
-    fn because_of(
-        &self,
-        outcome: Outcome,
-        time_sample: u64,
-        peak: f32,
-        guard: Guard,
-    ) -> Option<(u64, u64)> {
-        match outcome {
-            Outcome::SpeechGuard => self.guard_sound(time_sample, peak, guard),
+    /// The samples of the sound that the stage which decided `d` held against its onset
+    /// ([`OnsetRecord::because_of`]); its peak and guard as its first look found them.
+    fn because_of(&self, d: &Decision) -> Option<(u64, u64)> {
+        match d.outcome {
+            Outcome::SpeechGuard => self.guard_sound(d.time_sample, d.peak, d.guard),
             // A repeated sound goes on past its take's end: up to this onset.
             Outcome::Continuation => self
                 .last_impulse
-                .map(|last| (last.span.0, last.span.1.max(time_sample))),
+                .map(|last| (last.span.0, last.span.1.max(d.time_sample))),
             Outcome::HeldContinues => self.held.current().map(|h| (h.begin_sample, self.received)),
             Outcome::SameOnset => self.last_fired.map(|t| (t, t)),
             Outcome::Background => self
                 .talk_nearest
-                .filter(|&(score, _)| score > self.background_score)
+                .filter(|_| d.evidence.by_own_talk())
                 .map(|(_, at)| (at, at)),
             _ => None,
         }
@@ -1664,9 +1657,7 @@ impl SpectralMatcher {
             outcome: d.outcome,
             // Known once it has fired.
             taught: None,
-            because_of: self
-                .because_of(d.outcome, d.time_sample, d.peak, d.guard)
-                .map(|span| self.sound_span(span)),
+            because_of: self.because_of(d).map(|span| self.sound_span(span)),
         };
         if let Some(records) = &mut self.explain {
             records.push(record);
