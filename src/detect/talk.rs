@@ -16,6 +16,8 @@
 //! Runs on the detector thread, inside the spectral matcher; fixed size, allocates
 //! nothing after `new`.
 
+use super::features::similarity;
+
 /// How long a sound heard inside talk counts, seconds. Swept over the speech sets of
 /// the development sets and the twelve unheard voices, with one and three takes
 /// (`docs/speech-guard.md`, "The user's own talk, heard as it goes"): every length
@@ -82,10 +84,7 @@ impl HeardTalk {
             .chunks_exact(self.features)
             .zip(&self.heard_at)
             .filter(|&(_, &at)| at < now && now - at <= self.kept_samples)
-            .map(|(talk, &at)| {
-                let score: f32 = talk.iter().zip(instance).map(|(a, b)| a * b).sum();
-                (score, at)
-            })
+            .map(|(talk, &at)| (similarity(talk, instance), at))
             .fold(None, |best: Option<(f32, u64)>, (score, at)| match best {
                 Some((b, _)) if b >= score => best,
                 _ => Some((score, at)),
